@@ -1,0 +1,226 @@
+"""The single definition of the material's parameters.
+
+Every parameter is a field of :class:`LayeredParams`.  Its metadata (label, unit,
+hard range, soft range, description, enum options, whether it is a shader input)
+is the one place from which the Blender properties, the command-line options, the
+shader sockets and :meth:`LayeredParams.validate` are derived.
+
+This module imports numpy only through the standard library; it never imports bpy.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any, Iterator, Mapping
+
+# Representative wavelengths of the R, G and B channels, in nanometres (SPEC).
+WAVELENGTHS_NM = (645.0, 525.0, 445.0)
+
+
+class ParameterError(ValueError):
+    """A parameter is outside its allowed range or of the wrong kind."""
+
+    def __init__(self, name: str, value: Any, allowed: str):
+        self.name = name
+        self.value = value
+        self.allowed = allowed
+        super().__init__(f"parameter '{name}' = {value!r} is invalid: allowed {allowed}")
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """Metadata of one parameter (derived from a dataclass field)."""
+
+    name: str
+    label: str
+    kind: str  # "float", "enum" or "bool"
+    default: Any
+    description: str
+    unit: str = ""
+    min: float = -math.inf
+    max: float = math.inf
+    soft_min: float | None = None
+    soft_max: float | None = None
+    options: tuple[str, ...] = ()
+    socket: bool = True  # an input socket of the shader (animatable)
+    group: str = "Layer"
+
+    @property
+    def allowed(self) -> str:
+        if self.kind == "enum":
+            return "one of " + ", ".join(repr(o) for o in self.options)
+        if self.kind == "bool":
+            return "true or false"
+        unit = f" {self.unit}" if self.unit else ""
+        return f"a number in [{_fmt(self.min)}, {_fmt(self.max)}]{unit}"
+
+    def check(self, value: Any) -> Any:
+        """Return ``value`` converted to the parameter's kind, or raise ParameterError."""
+        if self.kind == "enum":
+            if value not in self.options:
+                raise ParameterError(self.name, value, self.allowed)
+            return value
+        if self.kind == "bool":
+            if not isinstance(value, bool):
+                raise ParameterError(self.name, value, self.allowed)
+            return value
+        if isinstance(value, bool):
+            raise ParameterError(self.name, value, self.allowed)
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            raise ParameterError(self.name, value, self.allowed) from None
+        if not math.isfinite(x) or x < self.min or x > self.max:
+            raise ParameterError(self.name, value, self.allowed)
+        return x
+
+
+def _fmt(x: float) -> str:
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return f"{x:g}"
+
+
+def _p(default, label, description, *, unit="", range=(-math.inf, math.inf), soft=None,
+       options=(), socket=True, group="Layer"):
+    kind = "enum" if options else ("bool" if isinstance(default, bool) else "float")
+    meta = dict(label=label, description=description, unit=unit, min=range[0], max=range[1],
+                soft_min=None if soft is None else soft[0], soft_max=None if soft is None else soft[1],
+                options=tuple(options), socket=socket and kind == "float", group=group, kind=kind)
+    return field(default=default, metadata={"layered": meta})
+
+
+THICKNESS_MODES = ("noise", "height")
+NORMAL_MODES = ("parallel", "tilted", "correlated")
+LOBES = ("beckmann", "phong")
+
+
+@dataclass
+class LayeredParams:
+    """Parameters of the layered RGB BRDF (Granier & Heidrich 2003).
+
+    Thickness ``d`` varies over the surface: ``d = d_min + (d_max - d_min) * n(p)``
+    with ``n`` the noise factor (``thickness_mode="noise"``) or ``0.5 - 0.5 z``
+    (``"height"``: a film that thickens downwards, like a draining soap film),
+    ``p`` the object-space position.
+    """
+
+    # --- the layer -------------------------------------------------------
+    r1_r: float = _p(1.4, "Index R", "Refractive index of the layer at 645 nm (red)",
+                     range=(0.1, 5.0), soft=(1.0, 2.5))
+    r1_g: float = _p(1.45, "Index G", "Refractive index of the layer at 525 nm (green)",
+                     range=(0.1, 5.0), soft=(1.0, 2.5))
+    r1_b: float = _p(1.6, "Index B", "Refractive index of the layer at 445 nm (blue)",
+                     range=(0.1, 5.0), soft=(1.0, 2.5))
+    r0: float = _p(1.0, "Outside index", "Refractive index of the medium above the layer (air is 1)",
+                   range=(0.1, 5.0), soft=(1.0, 1.5))
+    d_min: float = _p(66.0, "Thickness min", "Thinnest layer thickness", unit="nm",
+                      range=(0.0, 1.0e6), soft=(0.0, 2000.0))
+    d_max: float = _p(76.0, "Thickness max", "Thickest layer thickness", unit="nm",
+                      range=(0.0, 1.0e6), soft=(0.0, 2000.0))
+    thickness_mode: str = _p("noise", "Thickness pattern",
+                             "How thickness varies: 'noise' (Perlin fBm) or 'height' (thicker downwards)",
+                             options=THICKNESS_MODES)
+    noise_scale: float = _p(4.0, "Noise scale", "Scale of the thickness noise in object space",
+                            range=(1.0e-4, 1.0e4), soft=(0.1, 50.0), group="Noise")
+    noise_detail: float = _p(2.0, "Noise detail", "Octaves of the thickness noise",
+                             range=(0.0, 15.0), soft=(0.0, 8.0), group="Noise")
+    noise_roughness: float = _p(0.5, "Noise roughness", "Amplitude ratio of successive octaves",
+                                range=(0.0, 1.0), group="Noise")
+    noise_phase: float = _p(0.0, "Noise phase", "Fourth noise coordinate (W): animate it to make the pattern flow",
+                            range=(-1.0e5, 1.0e5), soft=(-10.0, 10.0), group="Noise")
+    # --- the lower boundary ---------------------------------------------
+    normal_mode: str = _p("parallel", "Lower normal",
+                          "Lower boundary normal: 'parallel', constant 'tilted', or 'correlated' with the thickness gradient",
+                          options=NORMAL_MODES)
+    tilt: float = _p(0.0, "Tilt", "Angle between the lower and upper boundary normals", unit="deg",
+                     range=(0.0, 180.0), soft=(0.0, 30.0), group="Lower boundary")
+    tilt_azimuth: float = _p(0.0, "Tilt azimuth", "Rotation of the tilt axis about the normal", unit="deg",
+                             range=(-360.0, 360.0), group="Lower boundary")
+    bump_strength: float = _p(5.0e-4, "Bump strength",
+                              "Lower-normal bend per unit thickness gradient (object units per nm)",
+                              unit="1/nm", range=(0.0, 1.0e3), soft=(0.0, 0.01), group="Lower boundary")
+    # --- specular and diffuse --------------------------------------------
+    e0: float = _p(90.0, "Upper exponent", "Phong exponent of the upper boundary (higher is sharper)",
+                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular")
+    e1: float = _p(170.0, "Lower exponent", "Phong exponent of the lower boundary, inside the layer",
+                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular")
+    ks: float = _p(1.0, "Specular weight", "Weight of the specular (Phong-like) part",
+                   range=(0.0, 1.0), group="Specular")
+    kd: float = _p(0.7, "Diffuse weight", "Weight of the diffuse part", range=(0.0, 1.0), group="Diffuse")
+    base_r: float = _p(0.8, "Base R", "Diffuse base colour, red", range=(0.0, 1.0), group="Diffuse")
+    base_g: float = _p(0.8, "Base G", "Diffuse base colour, green", range=(0.0, 1.0), group="Diffuse")
+    base_b: float = _p(0.8, "Base B", "Diffuse base colour, blue", range=(0.0, 1.0), group="Diffuse")
+    lobe: str = _p("beckmann", "Lobe",
+                   "Closure used for the specular lobes: 'beckmann' (both backends) or 'phong' (OSL only)",
+                   options=LOBES, group="Accuracy")
+
+    # ------------------------------------------------------------------
+    @classmethod
+    def specs(cls) -> tuple[ParamSpec, ...]:
+        return PARAM_SPECS
+
+    @classmethod
+    def spec(cls, name: str) -> ParamSpec:
+        try:
+            return _SPEC_BY_NAME[name]
+        except KeyError:
+            raise ParameterError(name, None, "a known parameter name: " + ", ".join(_SPEC_BY_NAME)) from None
+
+    def validate(self) -> "LayeredParams":
+        """Check every value; raise :class:`ParameterError` naming the first bad one."""
+        for s in PARAM_SPECS:
+            object.__setattr__(self, s.name, s.check(getattr(self, s.name)))
+        if self.d_min > self.d_max:
+            raise ParameterError("d_min", self.d_min, f"at most d_max = {self.d_max:g} nm")
+        return self
+
+    # convenience views ---------------------------------------------------
+    @property
+    def r1(self) -> tuple[float, float, float]:
+        return (self.r1_r, self.r1_g, self.r1_b)
+
+    @property
+    def base_color(self) -> tuple[float, float, float]:
+        return (self.base_r, self.base_g, self.base_b)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], *, base: "LayeredParams | None" = None) -> "LayeredParams":
+        """Build from a mapping (e.g. JSON); unknown keys are an error; the result is validated."""
+        unknown = set(data) - set(_SPEC_BY_NAME)
+        if unknown:
+            name = sorted(unknown)[0]
+            raise ParameterError(name, data[name], "a known parameter name: " + ", ".join(_SPEC_BY_NAME))
+        values = dataclasses.asdict(base) if base is not None else {}
+        values.update(data)
+        return cls(**values).validate()
+
+    def replace(self, **changes: Any) -> "LayeredParams":
+        return LayeredParams.from_dict(changes, base=self)
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2, sort_keys=True)
+
+
+def _spec_of(f: dataclasses.Field) -> ParamSpec:
+    m = dict(f.metadata["layered"])
+    return ParamSpec(name=f.name, default=f.default, **m)
+
+
+PARAM_SPECS: tuple[ParamSpec, ...] = tuple(_spec_of(f) for f in dataclasses.fields(LayeredParams))
+_SPEC_BY_NAME = {s.name: s for s in PARAM_SPECS}
+
+
+def iter_sockets() -> Iterator[ParamSpec]:
+    """The parameters that are shader inputs, in socket order."""
+    return (s for s in PARAM_SPECS if s.socket)
+
+
+def socket_name(spec: ParamSpec) -> str:
+    """Name of the shader input (OSL parameter / node-group socket) of a parameter."""
+    return spec.name
