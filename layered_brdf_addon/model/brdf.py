@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .geometry import Z_AXIS, dot, reflect, refract, safe_normalize
+from .geometry import Z_AXIS
 from .params import WAVELENGTHS_NM
 
 TWO_PI = 2.0 * np.pi
@@ -21,21 +21,27 @@ def fresnel_f0(r1, r0=1.0):
     return ((r0 - r1) / (r0 + r1)) ** 2
 
 
+def _pow5(x):
+    x2 = x * x
+    return x2 * x2 * x
+
+
 def schlick(cos_theta, f):
     """Schlick's approximation, eq. 7, for a direction pointing away from the surface."""
-    c = np.clip(cos_theta, 0.0, 1.0)
-    return f + (1.0 - f) * (1.0 - c) ** 5
+    return f + (1.0 - f) * _pow5(1.0 - np.clip(cos_theta, 0.0, 1.0))
 
 
 def transmission_factor(cos_down, f):
     """Eq. 9: ``(1 - f)(1 - (1 + <v, n0>)^5)`` for an in-layer direction ``v`` pointing down."""
-    x = np.clip(1.0 + cos_down, 0.0, 1.0)
-    return (1.0 - f) * (1.0 - x ** 5)
+    return (1.0 - f) * (1.0 - _pow5(np.clip(1.0 + cos_down, 0.0, 1.0)))
 
 
 def phong_lobe(c, e):
     """``max(c, 0)^e``, and 0 wherever ``c <= 0`` even for ``e = 0`` (never ``0^0``)."""
     c = np.asarray(c, dtype=float)
+    if np.ndim(e) == 0 and e > 0.0:
+        with np.errstate(under="ignore"):
+            return np.power(np.maximum(c, 0.0), e)  # 0^e = 0 for e > 0
     pos = c > 0.0
     with np.errstate(divide="ignore", invalid="ignore", under="ignore"):
         v = np.power(np.where(pos, np.minimum(c, 1.0), 1.0), e)
@@ -56,63 +62,92 @@ class SpecularTerms(NamedTuple):
     rho: np.ndarray  # eq. 5
 
 
-def _prepare(i, o, n0, n1, ng):
-    ng = safe_normalize(np.asarray(ng, dtype=float))
-    n0 = safe_normalize(np.asarray(n0, dtype=float), ng)
-    n1 = safe_normalize(np.asarray(n1, dtype=float), n0)
-    i = np.asarray(i, dtype=float)
-    o = np.asarray(o, dtype=float)
-    i_len = np.sqrt(dot(i, i))
-    o_len = np.sqrt(dot(o, o))
-    ok = np.isfinite(i_len) & np.isfinite(o_len) & (i_len > 0) & (o_len > 0)
-    i = safe_normalize(i)
-    o = safe_normalize(o)
-    return i, o, n0, n1, ok
+def _rows(v):
+    v = np.asarray(v, dtype=float)
+    return v[..., 0], v[..., 1], v[..., 2]
+
+
+def _dot3(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _unit_rows(v, fallback=None):
+    """Components of ``v / |v|``; rows that are zero or not finite take ``fallback``'s."""
+    c = _rows(v)
+    n2 = _dot3(c, c)
+    ok = np.isfinite(n2) & (n2 > 1e-24)
+    if np.all(ok):
+        inv = 1.0 / np.sqrt(n2)
+        return (c[0] * inv, c[1] * inv, c[2] * inv), ok
+    inv = 1.0 / np.sqrt(np.where(ok, n2, 1.0))
+    if fallback is None:
+        return tuple(np.where(ok, x * inv, 0.0) for x in c), ok
+    return tuple(np.where(ok, x * inv, f) for x, f in zip(c, fallback)), ok
 
 
 def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS) -> SpecularTerms:
     """Evaluate eqs. 3-11 with the lobe normalisations of SPEC.
 
     ``i``, ``o``, ``n0``, ``n1``: (..., 3).  ``r1`` and ``wavelengths``: (C,) or (..., C).
-    ``d``: thickness in nm, shape (...).  ``ng``: fallback for a degenerate ``n0``.
-    Directions below the horizon of ``n0`` give 0.
+    ``d``: thickness in nm, shape (...).  ``ng``: fallback for a degenerate ``n0``
+    (a degenerate ``n1`` falls back to ``n0``).  Directions below the horizon of ``n0``
+    give 0.
+
+    Everything is computed from six dot products of the unit vectors (refracted
+    directions are linear in the incident one and the normal), per channel on 1-D
+    arrays: no (..., C, 3) temporaries.
     """
-    i, o, n0, n1, ok = _prepare(i, o, n0, n1, ng)
+    g, _ = _unit_rows(ng, (0.0, 0.0, 1.0))
+    n0u, _ = _unit_rows(n0, g)
+    n1u, _ = _unit_rows(n1, n0u)
+    iu, ok_i = _unit_rows(i)
+    ou, ok_o = _unit_rows(o)
+
+    i_n0 = _dot3(iu, n0u)
+    o_n0 = _dot3(ou, n0u)
+    i_o = _dot3(iu, ou)
+    i_n1 = _dot3(iu, n1u)
+    o_n1 = _dot3(ou, n1u)
+    n0_n1 = _dot3(n0u, n1u)
+    ok = ok_i & ok_o & (i_n0 < 0.0) & (o_n0 > 0.0)
+
+    cos_l = np.where(ok, -i_n0, 0.0)[..., None]  # <-i, n0>
+    cos_v = np.where(ok, o_n0, 0.0)[..., None]
+    c_r = np.where(ok, i_o - 2.0 * i_n0 * o_n0, 0.0)[..., None]  # <r_i, o>; 0 gives no lobe
     r1 = np.asarray(r1, dtype=float)
     lam = np.asarray(wavelengths, dtype=float)
     d = np.asarray(d, dtype=float)[..., None]
     f = fresnel_f0(r1, r0)
 
-    cos_l = -dot(i, n0)  # <-i, n0>
-    cos_v = dot(o, n0)
-    ok = ok & (cos_l > 0.0) & (cos_v > 0.0)
-
     # Reflected part, eq. 6.
-    F = schlick(cos_l[..., None], f)
-    r_i = reflect(i, n0)
-    R = F * phong_norm(e0) * phong_lobe(dot(r_i, o), e0)[..., None]
+    F = schlick(cos_l, f)
+    R = F * phong_norm(e0) * phong_lobe(c_r, e0)
 
-    # Transmitted part, eqs. 9-11.
+    # Refraction into the layer (Snell): t = eta v + a n0 with a = eta cos - sqrt(k).
     eta = r0 / r1
-    ic = i[..., None, :]
-    oc = o[..., None, :]
-    n0c = n0[..., None, :]
-    n1c = n1[..., None, :]
-    t_i, ok_i = refract(ic, n0c, eta)
-    t_o, ok_o = refract(-oc, n0c, eta)
-    r_ti = reflect(t_i, n1c)
-    through = ok_i & ok_o & (dot(t_i, n1c) < 0.0) & (dot(t_o, n1c) < 0.0)
-    Tc = transmission_factor(dot(t_o, n0c), f)
-    T = (1.0 - F) * Tc * phong_norm(e1) / (r1 * r1) * phong_lobe(-dot(r_ti, t_o), e1)
-    T = np.where(through, T, 0.0)
+    k_i = 1.0 - eta * eta * (1.0 - cos_l * cos_l)
+    k_o = 1.0 - eta * eta * (1.0 - cos_v * cos_v)
+    refracts = (k_i >= 0.0) & (k_o >= 0.0)
+    s_i = np.sqrt(np.maximum(k_i, 0.0))  # <t_i, -n0>
+    s_o = np.sqrt(np.maximum(k_o, 0.0))  # <t_o, -n0>
+    a_i = eta * cos_l - s_i
+    a_o = eta * cos_v - s_o
+    ti_n1 = eta * i_n1[..., None] + a_i * n0_n1[..., None]
+    to_n1 = -eta * o_n1[..., None] + a_o * n0_n1[..., None]
+    # <t_i, t_o> = eta^2 <i, -o> + eta a_o <i, n0> + eta a_i <n0, -o> + a_i a_o
+    ti_to = -eta * eta * i_o[..., None] - eta * a_o * cos_l - eta * a_i * cos_v + a_i * a_o
+    c_t = -(ti_to - 2.0 * ti_n1 * to_n1)  # <r_ti, -t_o>, eq. 10
+    through = refracts & (ti_n1 < 0.0) & (to_n1 < 0.0) & ok[..., None]  # eq. 11
+
+    # Transmitted part, eqs. 9-10, lobe normalised by (e1 + 2) / (2 pi r1^2) (SPEC).
+    Tc = transmission_factor(-s_o, f)
+    T = (1.0 - F) * (Tc * (phong_norm(e1) / (r1 * r1))) * phong_lobe(np.where(through, c_t, 0.0), e1)
 
     # Phase, eq. 3, and the total, eq. 5.
-    phase = np.pi * r1 * d / lam * (-dot(t_i + t_o, n0c))
-    phase = np.where(through, phase, 0.0)
+    phase = (np.pi * r1 / lam) * (d * (s_i + s_o))  # meaningful where T > 0
     rho = R + T + 2.0 * np.cos(2.0 * phase) * np.sqrt(R * T)
     rho = np.maximum(rho, 0.0)  # exact value is >= (sqrt R - sqrt T)^2; removes round-off
-    okc = ok[..., None]
-    return SpecularTerms(np.where(okc, R, 0.0), np.where(okc, T, 0.0), phase, np.where(okc, rho, 0.0))
+    return SpecularTerms(R, T, phase, rho)
 
 
 def specular_brdf(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS):
