@@ -36,9 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .brdf import diffuse_rho, fresnel_f0, schlick, specular_brdf, transmission_factor
+from . import ops_numpy, program
+from .brdf import diffuse_rho, specular_brdf
 from .geometry import dot, safe_normalize
 from .params import WAVELENGTHS_NM, LayeredParams
+from .plan import EffectPlan, plan_effects
 
 INV_2PI = 0.5 / np.pi
 
@@ -124,178 +126,79 @@ def ensure_valid_specular_reflection(Ng, v, N):
 
 
 # --------------------------------------------------------------------------
-@dataclass
-class Lobe:
-    """One glossy closure: its normal (..., 3), Phong exponent (...), RGB weight (..., 3)."""
-
-    name: str
-    normal: np.ndarray
-    exponent: np.ndarray
-    weight: np.ndarray
+CLOSURE_WEIGHT_CUTOFF = 1e-5  # Cycles drops a closure whose mean weight is below this
 
 
-def _gauss_overlap(p, q, delta2):
-    """Integral of exp(-p|x-a|^2/2) exp(-q|x-b|^2/2) over the plane, |a - b|^2 = delta2."""
-    return 2.0 * np.pi / (p + q) * np.exp(-p * q / (2.0 * (p + q)) * delta2)
-
-
-def _angle2(a, b):
-    """Squared angle between unit vectors (robust for small angles)."""
-    return (2.0 * np.arctan2(np.sqrt(dot(a - b, a - b)), np.sqrt(dot(a + b, a + b)))) ** 2
-
-
-def fold_interference(AR, AT, AI, eR, eT, eI, cR, cT, cI):
-    """Fold a negative interference amplitude into the reflected and transmitted ones.
-
-    The target ``f = AR gR + AT gT + AI gI`` (Gaussian lobes ``exp(-e theta^2 / 2)`` in
-    the tangent plane, ``AI < 0``) is replaced by its non-negative least-squares fit
-    ``wR gR + wT gT``: the unconstrained 2x2 solution where both weights are >= 0,
-    otherwise the better of the single-lobe fits.  Returns ``(AR, AT, AI)``, unchanged
-    where ``AI >= 0``.
-    """
-    gRR = _gauss_overlap(eR, eR, 0.0)
-    gTT = _gauss_overlap(eT, eT, 0.0)
-    gRT = _gauss_overlap(eR, eT, _angle2(cR, cT))
-    gRI = _gauss_overlap(eR, eI, _angle2(cR, cI))
-    gTI = _gauss_overlap(eT, eI, _angle2(cT, cI))
-    # <f, gR> and <f, gT>
-    bR = AR * gRR + AT * gRT + AI * gRI
-    bT = AR * gRT + AT * gTT + AI * gTI
-    ridge = 1e-6 * (gRR + gTT)  # equal lobes make the system singular
-    m11, m22 = gRR + ridge, gTT + ridge
-    det = m11 * m22 - gRT * gRT
-    wR2 = (m22 * bR - gRT * bT) / det
-    wT2 = (m11 * bT - gRT * bR) / det
-    both = (wR2 >= 0.0) & (wT2 >= 0.0)
-    wR1 = np.maximum(bR, 0.0) / gRR
-    wT1 = np.maximum(bT, 0.0) / gTT
-    r_better = bR * wR1 >= bT * wT1  # the fit that removes more of ||f||^2
-    wR = np.where(both, wR2, np.where(r_better, wR1, 0.0))
-    wT = np.where(both, wT2, np.where(r_better, 0.0, wT1))
-    negative = AI < 0.0
-    return np.where(negative, wR, AR), np.where(negative, wT, AT), np.where(negative, 0.0, AI)
-
-
-def _refract(v, n, eta):
-    cosi = -dot(v, n)
-    k = 1.0 - eta * eta * (1.0 - cosi * cosi)
-    ok = (cosi > 0.0) & (k >= 0.0)
-    t = eta * v + (eta * cosi - np.sqrt(np.maximum(k, 0.0)))[..., None] * n
-    return np.where(ok[..., None], t, 0.0), ok
-
-
-def specular_lobes(params: LayeredParams, n0, n1, d, v, wavelengths=WAVELENGTHS_NM, fold=True):
-    """The closure decomposition at each shading point (see the module docstring).
-
-    Returns a list of :class:`Lobe` whose amplitudes are pixel values per unit
-    irradiance at the lobe centre (not yet divided by the closure's peak) and the
-    lobe centres, as ``(lobes, centres)``.
-    """
+def program_inputs(params: LayeredParams) -> dict:
     p = params
+    return dict(r1=p.r1, r0=p.r0, e0=p.e0, e1=p.e1, ks=p.ks, kd=p.kd, base=p.base_color)
+
+
+def shade_closures(params: LayeredParams, n0, n1, d, v, plan: EffectPlan | None = None,
+                   wavelengths=WAVELENGTHS_NM):
+    """Run the shading program on numpy arrays: the closures the shaders return."""
     n0 = np.asarray(n0, dtype=float)
     v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
-    n1 = np.asarray(n1, dtype=float)
-    d = np.asarray(d, dtype=float)
-    cos_v = np.clip(dot(v, n0), 0.0, 1.0)
-    r_v = 2.0 * dot(v, n0)[..., None] * n0 - v
-    e0 = float(p.e0)
-    shape = n0.shape[:-1]
-    AR_all = np.zeros(shape + (3,))
-    lobes, centres = [], []
-    for c, (r1, lam) in enumerate(zip(p.r1, wavelengths)):
-        f = fresnel_f0(r1, p.r0)
-        F = schlick(cos_v, f)
-        AR = p.ks * F * (e0 + 2.0) * INV_2PI * cos_v
-        eta = p.r0 / r1
-        t_o, ok_o = _refract(-v, n0, eta)
-        r = t_o - 2.0 * dot(t_o, n1)[..., None] * n1
-        l_star, ok_l = _refract(r, -n0, 1.0 / eta)
-        through = ok_o & ok_l & (dot(t_o, n1) < 0.0) & (cos_v > 0.0)
-        l_star = np.where(through[..., None], safe_normalize(l_star, r_v), r_v)
-        cos_ls = np.clip(dot(l_star, n0), 0.0, 1.0)
-        through &= cos_ls > 0.0
-        # The in-layer lobe seen from outside: angles shrink by 1/r1 across the plane of
-        # incidence and by cos(l*)/(r1 cos t) within it; the geometric mean keeps its solid angle.
-        s_ls = np.sqrt(np.maximum(1.0 - eta * eta * (1.0 - cos_ls * cos_ls), 1e-12))
-        e1p = p.e1 / (r1 * r1) * np.where(through, cos_ls / s_ls, 1.0)
-        Tc = transmission_factor(dot(t_o, n0), f)
-        F_l = schlick(cos_ls, f)
-        AT_amp = p.ks * (1.0 - F_l) * Tc * (p.e1 + 2.0) * INV_2PI / (r1 * r1)
-        AR_amp = p.ks * F * (e0 + 2.0) * INV_2PI
-        AT = np.where(through, AT_amp * cos_ls, 0.0)
-        # Interference lobe.
-        w_sum = e0 + e1p
-        safe_sum = np.where(w_sum > 0, w_sum, 1.0)
-        c_I = safe_normalize(e0 * r_v + e1p[..., None] * l_star, r_v)
-        delta2 = _angle2(r_v, l_star)
-        atten = np.where(w_sum > 0, np.exp(-(e0 * e1p) / (4.0 * safe_sum) * delta2), 1.0)
-        cos_ci = np.clip(dot(c_I, n0), 0.0, 1.0)
-        s_i = np.sqrt(np.maximum(1.0 - eta * eta * (1.0 - cos_ci * cos_ci), 0.0))
-        s_o = -dot(t_o, n0)
-        phase = np.pi * r1 * d / lam * (s_i + s_o)
-        AI = np.where(through, 2.0 * np.cos(2.0 * phase) * np.sqrt(AR_amp * np.maximum(AT_amp, 0.0)) * atten * cos_ci, 0.0)
-        eI = 0.5 * w_sum
-        if fold:
-            AR, AT, AI = fold_interference(AR, AT, AI, e0, e1p, eI, r_v, l_star, c_I)
-        AR_all[..., c] = AR
-        wT = np.zeros(shape + (3,))
-        wT[..., c] = AT
-        wI = np.zeros(shape + (3,))
-        wI[..., c] = AI
-        lobes.append(Lobe(f"transmit_{'rgb'[c]}", safe_normalize(v + l_star, n0), e1p, wT))
-        lobes.append(Lobe(f"interfere_{'rgb'[c]}", safe_normalize(v + c_I, n0), eI, wI))
-        centres += [l_star, c_I]
-    lobes.insert(0, Lobe("reflect", n0, np.full(shape, e0), AR_all))
-    centres.insert(0, r_v)
-    return lobes, centres
+    d = np.broadcast_to(np.asarray(d, dtype=float), n0.shape[:-1])
+    plan = plan or plan_effects(params)
+    return program.shade(ops_numpy, program_inputs(params), ops_numpy.vec(n0), ops_numpy.vec(n1), d,
+                         ops_numpy.vec(v), plan, wavelengths)
 
 
-def closure_value(lobe_kind, N, v, l, e, ng=None):
-    """Value of one closure (cosine included) and its value at its own mirror direction."""
-    if ng is not None:
-        N = ensure_valid_specular_reflection(ng, v, N)
-    cos_nv = dot(N, v)
-    if lobe_kind == "phong":
-        return phong_ramp_eval(N, v, l, e), phong_peak(cos_nv, e)
-    alpha = np.minimum(phong_to_alpha(e, cos_nv), 1.0)
-    return beckmann_eval(N, v, l, alpha), beckmann_peak(cos_nv, alpha)
+def evaluate_closures(result, n0, v, l, lobe_kind="beckmann", ng=None, bump_correction=True):
+    """Cycles' evaluation of the closures for light ``l``: pixel per unit irradiance.
 
-
-def evaluate_lobes(lobes, v, l, lobe_kind="beckmann", ng=None):
-    """Pixel per unit irradiance of amplitude-weighted lobes for light ``l``."""
-    v = np.broadcast_to(np.asarray(v, dtype=float), lobes[0].normal.shape)
-    l = np.broadcast_to(np.asarray(l, dtype=float), v.shape)
-    out = np.zeros(v.shape[:-1] + (3,))
-    for lobe in lobes:
-        val, peak = closure_value(lobe_kind, lobe.normal, v, l, lobe.exponent, ng)
-        ratio = np.where(peak > 0, val / np.where(peak > 0, peak, 1.0), 0.0)
-        out += np.maximum(lobe.weight, 0.0) * ratio[..., None]
+    Mirrors the kernel: weights clamped at 0, closures with a mean weight below 1e-5
+    dropped, glossy normals bent by ``ensure_valid_specular_reflection`` (when
+    ``bump_correction`` and ``ng`` is given), and the bump shadowing term.
+    """
+    n0 = np.asarray(n0, dtype=float)
+    v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
+    l = np.broadcast_to(np.asarray(l, dtype=float), n0.shape)
+    out = np.zeros(n0.shape[:-1] + (3,))
+    for cl in result.glossy:
+        w = np.maximum(np.stack([np.broadcast_to(x, n0.shape[:-1]) for x in cl.weight], axis=-1), 0.0)
+        w = np.where((w.mean(axis=-1) >= CLOSURE_WEIGHT_CUTOFF)[..., None], w, 0.0)
+        N = safe_normalize(np.asarray(cl.normal, dtype=float), n0)
+        if bump_correction and ng is not None:
+            N = np.where(np.all(N == ng, axis=-1, keepdims=True), N, ensure_valid_specular_reflection(ng, v, N))
+        if lobe_kind == "phong":
+            val = phong_ramp_eval(N, v, l, np.asarray(cl.exponent))
+        else:
+            val = beckmann_eval(N, v, l, np.asarray(cl.alpha))
+        # Bump shadowing: a closure normal on the other side of the light than n0 sees nothing.
+        shadow = dot(n0, l) * dot(n0, N) * dot(N, l) < 0.0
+        out += w * np.where(shadow, 0.0, val)[..., None]
+    if result.diffuse is not None:
+        col = np.stack([np.broadcast_to(x, n0.shape[:-1]) for x in result.diffuse], axis=-1)
+        col = np.where((np.maximum(col, 0).mean(axis=-1) >= CLOSURE_WEIGHT_CUTOFF)[..., None], np.maximum(col, 0), 0)
+        out += col * (np.maximum(dot(n0, l), 0.0) / np.pi)[..., None]
     return out
 
 
-def diffuse_shading(params, n0, d, l, wavelengths=WAVELENGTHS_NM):
-    cos_l = np.maximum(dot(n0, np.asarray(l)), 0.0)
-    return params.kd * diffuse_rho(params.r1, d, params.r0, wavelengths) * np.asarray(params.base_color) \
-        * (cos_l / np.pi)[..., None]
-
-
-def closure_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTHS_NM, ng=None, fold=True):
+def closure_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTHS_NM, ng=None,
+                    plan: EffectPlan | None = None):
     """What the shaders render per unit sun irradiance (same signature as ``exact_shading``)."""
-    lobes, _ = specular_lobes(params, n0, n1, d, v, wavelengths, fold)
-    spec = evaluate_lobes(lobes, v, l, params.lobe, ng)
-    return spec + diffuse_shading(params, n0, d, l, wavelengths)
+    plan = plan or plan_effects(params)
+    res = shade_closures(params, n0, n1, d, v, plan, wavelengths)
+    return evaluate_closures(res, n0, v, l, plan.lobe, ng)
 
 
 def single_lobe_shading(params: LayeredParams, n0, n1, d, l, v, exponent=None, wavelengths=WAVELENGTHS_NM,
                         lobe_kind="phong"):
-    """Baseline: one lobe per channel about the mirror direction, its weight the exact ``rho``
-    at the mirror configuration, exponent ``e0`` unless given."""
+    """Baseline: one Phong lobe per channel about the mirror direction, its weight the exact
+    ``rho`` at the mirror configuration, exponent ``e0`` unless given."""
     n0 = np.asarray(n0, dtype=float)
     v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
     r_v = 2.0 * dot(v, n0)[..., None] * n0 - v
     rho = specular_brdf(-r_v, v, n0, n1, params.r1, d, params.e0, params.e1, params.r0, wavelengths, ng=n0)
     cos_v = np.clip(dot(v, n0), 0.0, 1.0)
-    e = params.e0 if exponent is None else exponent
-    lobe = Lobe("single", n0, np.full(n0.shape[:-1], float(e)), params.ks * rho * cos_v[..., None])
-    spec = evaluate_lobes([lobe], v, l, lobe_kind)
-    return spec + diffuse_shading(params, n0, d, l, wavelengths)
+    e = float(params.e0 if exponent is None else exponent)
+    peak = phong_peak(cos_v, e)
+    amp = params.ks * rho * cos_v[..., None]
+    w = np.where(peak[..., None] > 0, amp / np.where(peak > 0, peak, 1.0)[..., None], 0.0)
+    res = program.ShadingResult(glossy=[program.Closure("single", n0, np.full(cos_v.shape, e), None,
+                                                        (w[..., 0], w[..., 1], w[..., 2]))])
+    spec = evaluate_closures(res, n0, v, l, "phong")
+    kd = diffuse_rho(params.r1, d, params.r0, wavelengths) * params.kd * np.asarray(params.base_color)
+    return spec + kd * (np.maximum(dot(n0, np.asarray(l)), 0.0) / np.pi)[..., None]
