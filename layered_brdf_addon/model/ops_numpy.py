@@ -25,6 +25,14 @@ def cos(x):
     return np.cos(x)
 
 
+def sin(x):
+    return np.sin(x)
+
+
+def cross(a, b):
+    return vec(np.cross(_plain(a), _plain(b)))
+
+
 def atan2(y, x):
     return np.arctan2(y, x)
 
@@ -43,10 +51,6 @@ def lt(a, b):
 
 def gt(a, b):
     return (_s(a) > b).astype(float)
-
-
-def ge(a, b):
-    return (_s(a) >= b).astype(float)
 
 
 def select(c, a, b):
@@ -120,3 +124,8 @@ class _Vec(np.ndarray):
 def vec(a):
     """Wrap a (..., 3) array so ``vec * per_point_scalar`` broadcasts per point."""
     return np.asarray(a, dtype=float).view(_Vec)
+
+
+def call(name, fn, inputs, **static):
+    """Run a sub-program (a node backend turns it into a sub-group)."""
+    return fn(__import__(__name__, fromlist=["_"]), **inputs, **static)

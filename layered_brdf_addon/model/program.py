@@ -63,15 +63,8 @@ def transmission_factor(ops, s, f):
 
 
 def angle2(ops, a, b):
-    """Squared angle between unit vectors, accurate for small angles."""
-    t = 2.0 * ops.atan2(ops.length(a - b), ops.length(a + b))
-    return t * t
-
-
-def gauss_overlap(ops, p, q, delta2):
-    """Integral over the tangent plane of exp(-p|x-a|^2/2) exp(-q|x-b|^2/2), |a-b|^2 = delta2."""
-    s = ops.maximum(p + q, 1e-6)
-    return (2.0 * math.pi) / s * ops.exp(-(p * q) / (2.0 * s) * delta2)
+    """Squared chord between unit vectors, ``2 - 2 <a, b>``: the squared angle for small angles."""
+    return ops.maximum(2.0 - 2.0 * ops.dot(a, b), 0.0)
 
 
 def beckmann_lambda(ops, alpha2, mu):
@@ -106,27 +99,50 @@ def closure_for(ops, lobe, name, normal, e, v, amplitudes):
     return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes))
 
 
+def lobe_correlation(ops, p, q, delta2):
+    """Normalised overlap <gp, gq> / (|gp| |gq|) of two tangent-plane Gaussian lobes, and
+    ``1 - rho^2`` computed without cancellation (float32 shaders need it)."""
+    s = p + q
+    qq = 2.0 * ops.sqrt(p * q) / s  # 1 for equal exponents
+    x = 0.5 * (p * q) / s * delta2
+    e = ops.exp(-x)
+    rho = qq * e
+    diff = (p - q) / s
+    one_minus_rho2 = diff * diff + qq * qq * (1.0 - e * e)
+    return rho, one_minus_rho2
+
+
 def fold_interference(ops, AR, AT, AI, eR, eT, eI, cR, cT, cI):
     """Non-negative least-squares fit of ``AR gR + AT gT + AI gI`` (``AI < 0``) by
-    ``wR gR + wT gT`` (Gaussian lobes in the tangent plane); unchanged where ``AI >= 0``."""
-    gRR = gauss_overlap(ops, eR, eR, 0.0)
-    gTT = gauss_overlap(ops, eT, eT, 0.0)
-    gRT = gauss_overlap(ops, eR, eT, angle2(ops, cR, cT))
-    gRI = gauss_overlap(ops, eR, eI, angle2(ops, cR, cI))
-    gTI = gauss_overlap(ops, eT, eI, angle2(ops, cT, cI))
-    bR = AR * gRR + AT * gRT + AI * gRI
-    bT = AR * gRT + AT * gTT + AI * gTI
-    m11 = gRR + 1e-6 * (gRR + gTT)  # a small ridge: equal lobes make the system singular
-    m22 = gTT + 1e-6 * (gRR + gTT)
-    det = m11 * m22 - gRT * gRT
-    wR2 = (m22 * bR - gRT * bT) / det
-    wT2 = (m11 * bT - gRT * bR) / det
-    both = ops.ge(wR2, 0.0) * ops.ge(wT2, 0.0)
-    wR1 = ops.maximum(bR, 0.0) / gRR
-    wT1 = ops.maximum(bT, 0.0) / gTT
-    r_better = ops.ge(bR * wR1, bT * wT1)
-    wR = ops.select(both, wR2, ops.select(r_better, wR1, 0.0))
-    wT = ops.select(both, wT2, ops.select(r_better, 0.0, wT1))
+    ``wR gR + wT gT``, unchanged where ``AI >= 0``.
+
+    Gaussian lobes ``g = exp(-e theta^2 / 2)`` in the tangent plane; the normal
+    equations are solved in the basis of unit-norm lobes (``|g|^2 = 1/(2e)`` up to a
+    common factor), with a small ridge: equal lobes make them singular.  Where the
+    2x2 solution has a negative weight, the better single-lobe fit is used.
+    """
+    eR = ops.maximum(eR, 1e-3)
+    eT = ops.maximum(eT, 1e-3)
+    eI = ops.maximum(eI, 1e-3)
+    uR = 1.0 / ops.sqrt(2.0 * eR)
+    uT = 1.0 / ops.sqrt(2.0 * eT)
+    uI = 1.0 / ops.sqrt(2.0 * eI)
+    rRT, one_minus = lobe_correlation(ops, eR, eT, angle2(ops, cR, cT))
+    rRI, _ = lobe_correlation(ops, eR, eI, angle2(ops, cR, cI))
+    rTI, _ = lobe_correlation(ops, eT, eI, angle2(ops, cT, cI))
+    aR, aT, aI = AR * uR, AT * uT, AI * uI  # coefficients on unit-norm lobes
+    bR = aR + rRT * aT + rRI * aI
+    bT = rRT * aR + aT + rTI * aI
+    ridge = 1e-4
+    det = 2.0 * ridge + ridge * ridge + one_minus  # (1 + ridge)^2 - rho^2
+    wR2 = ((1.0 + ridge) * bR - rRT * bT) / det
+    wT2 = ((1.0 + ridge) * bT - rRT * bR) / det
+    both = ops.gt(wR2, 0.0) * ops.gt(wT2, 0.0)
+    wR1 = ops.maximum(bR, 0.0)
+    wT1 = ops.maximum(bT, 0.0)
+    r_better = ops.gt(bR * wR1, bT * wT1)  # the fit that removes more of ||f||^2
+    wR = ops.select(both, wR2, ops.select(r_better, wR1, 0.0)) / uR
+    wT = ops.select(both, wT2, ops.select(r_better, 0.0, wT1)) / uT
     neg = ops.lt(AI, 0.0)
     return ops.select(neg, wR, AR), ops.select(neg, wT, AT), ops.select(neg, 0.0, AI)
 
@@ -152,7 +168,7 @@ def channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v):
     k_l = 1.0 - inv_eta * inv_eta * (1.0 - cos_r * cos_r)
     l_raw = r * inv_eta - n0 * (inv_eta * cos_r - ops.sqrt(k_l))
     # Eq. 11 and total internal reflection on either crossing: no path, T = 0.
-    through = ops.ge(k_o, 0.0) * ops.ge(k_l, 0.0) * ops.lt(to_n1, 0.0) * ops.gt(cos_r, 0.0) * ops.gt(cos_v, 0.0)
+    through = ops.gt(k_o, 0.0) * ops.gt(k_l, 0.0) * ops.lt(to_n1, 0.0) * ops.gt(cos_r, 0.0) * ops.gt(cos_v, 0.0)
     l_star = ops.normalize(ops.select_vec(through, l_raw, r_v), r_v)
     cos_ls = ops.clamp(ops.dot(l_star, n0), 0.0, 1.0)
     through = through * ops.gt(cos_ls, 0.0)
@@ -187,6 +203,21 @@ def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
     return tuple(out)
 
 
+def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann"):
+    """One channel: its lobes (eqs. 3-11), the fold, and the weights of its transmitted and
+    interference closures.  A node backend builds it once as a sub-group used per channel."""
+    P = dict(e0=e0, e1=e1, ks=ks, r0=r0)
+    cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
+    r_v = n0 * (2.0 * ops.dot(v, n0)) - v
+    t = channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v)
+    AR, AT, AI = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], r_v, t["l_star"], t["c_I"])
+    out = dict(AR=AR)
+    for tag, amp, centre, e in (("T", AT, t["l_star"], t["eT"]), ("I", AI, t["c_I"], t["eI"])):
+        cl = closure_for(ops, lobe, tag, ops.normalize(v + centre, n0), e, v, (amp,))
+        out.update({f"N_{tag}": cl.normal, f"e_{tag}": e, f"alpha_{tag}": cl.alpha, f"w_{tag}": cl.weight[0]})
+    return out
+
+
 def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) -> ShadingResult:
     """Closures of the layered BRDF at one shading point.
 
@@ -199,29 +230,21 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
         res.diffuse = diffuse_colour(ops, P, d, wavelengths)
     if not plan.specular:
         return res
-    cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-    r_v = n0 * (2.0 * ops.dot(v, n0)) - v
-    e0 = P["e0"]
-    terms = [channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v) for r1, lam in zip(P["r1"], wavelengths)]
-    AR, AT, AI = [], [], []
-    for t in terms:
-        ar, at, ai = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], r_v, t["l_star"], t["c_I"])
-        AR.append(ar)
-        AT.append(at)
-        AI.append(ai)
-    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, e0, v, AR))
-    if plan.dispersion:
-        for c, t in enumerate(terms):
-            zero = [0.0, 0.0, 0.0]
-            wt, wi = list(zero), list(zero)
-            wt[c], wi[c] = AT[c], AI[c]
-            res.glossy.append(closure_for(ops, plan.lobe, f"transmit_{'rgb'[c]}", ops.normalize(v + t["l_star"], n0),
-                                          t["eT"], v, wt))
-            res.glossy.append(closure_for(ops, plan.lobe, f"interfere_{'rgb'[c]}", ops.normalize(v + t["c_I"], n0),
-                                          t["eI"], v, wi))
-    else:
-        # Equal indices: every channel's lobes share centre and exponent (green's are used).
-        t = terms[1]
-        res.glossy.append(closure_for(ops, plan.lobe, "transmit", ops.normalize(v + t["l_star"], n0), t["eT"], v, AT))
-        res.glossy.append(closure_for(ops, plan.lobe, "interfere", ops.normalize(v + t["c_I"], n0), t["eI"], v, AI))
+    blocks = [ops.call("channel", channel_block,
+                       dict(r1=r1, lam=float(lam), e0=P["e0"], e1=P["e1"], ks=P["ks"], r0=P["r0"],
+                            n0=n0, n1=n1, v=v, d=d), lobe=plan.lobe)
+              for r1, lam in zip(P["r1"], wavelengths)]
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, tuple(b["AR"] for b in blocks)))
+    for tag, label in (("T", "transmit"), ("I", "interfere")):
+        if plan.dispersion:
+            for c, b in enumerate(blocks):
+                w = [0.0, 0.0, 0.0]
+                w[c] = b[f"w_{tag}"]
+                res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}"], b[f"e_{tag}"], b[f"alpha_{tag}"],
+                                          tuple(w)))
+        else:
+            # Equal indices: every channel's lobe has the same centre and exponent (green's used).
+            g = blocks[1]
+            res.glossy.append(Closure(label, g[f"N_{tag}"], g[f"e_{tag}"], g[f"alpha_{tag}"],
+                                      tuple(b[f"w_{tag}"] for b in blocks)))
     return res

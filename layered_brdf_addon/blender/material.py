@@ -1,0 +1,152 @@
+"""apply_layered_material: the one function the UI, the CLI and the tests call."""
+from __future__ import annotations
+
+import bpy
+
+from ..model.params import ParameterError, LayeredParams, iter_sockets
+from ..model.plan import EffectPlan, plan_effects
+from . import osl as osl_backend
+from ._deps import node_group_builder
+
+MATERIAL_KEY = "layered_brdf"  # custom property marking materials made by the add-on
+BACKENDS = ("nodes", "osl")
+AOV_THICKNESS = "layer_thickness"
+AOV_LOWER_NORMAL = "lower_normal"
+AOV_UPPER_NORMAL = "upper_normal"  # Cycles' Normal pass averages closure normals: not n0 here
+SHADER_NODE = "Layered BRDF"
+
+
+def _material_for(target, name):
+    if isinstance(target, bpy.types.Material):
+        return target
+    obj = target
+    if isinstance(target, str):
+        obj = bpy.data.objects.get(target)
+        if obj is None:
+            raise ParameterError("target", target, "the name of an object in the file: "
+                                 + ", ".join(sorted(o.name for o in bpy.data.objects))[:400])
+    if not hasattr(obj, "data") or not hasattr(obj.data, "materials"):
+        raise ParameterError("target", obj.name, "an object that can hold materials (mesh, curve, ...)")
+    mat = None
+    if obj.active_material is not None and obj.active_material.get(MATERIAL_KEY):
+        mat = obj.active_material
+    if mat is not None and mat.library is not None:
+        raise ParameterError("target", obj.name, "an object whose material is local (it is linked from "
+                             f"{mat.library.filepath}); make it local first")
+    if mat is None:
+        mat = bpy.data.materials.new(name)
+        mat[MATERIAL_KEY] = True
+        if obj.data.materials:
+            obj.data.materials[obj.active_material_index] = mat
+        else:
+            obj.data.materials.append(mat)
+    return mat
+
+
+def shader_node(mat):
+    """The add-on's shader node in ``mat`` (group or script), or None."""
+    if mat.node_tree is None:
+        return None
+    return mat.node_tree.nodes.get(SHADER_NODE)
+
+
+def set_inputs(node, params: LayeredParams) -> None:
+    """Write parameter values into the shader node's input sockets (the source of truth)."""
+    for spec in iter_sockets():
+        sock = node.inputs.get(spec.name)
+        if sock is None:
+            raise RuntimeError(f"shader node lacks the input '{spec.name}'")
+        sock.default_value = float(getattr(params, spec.name))
+
+
+def read_inputs(node, base: LayeredParams | None = None) -> LayeredParams:
+    """Parameters from the shader node's sockets (enums from the material's stored settings)."""
+    values = {spec.name: float(node.inputs[spec.name].default_value) for spec in iter_sockets()}
+    return LayeredParams.from_dict(values, base=base or LayeredParams())
+
+
+def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan):
+    tree = mat.node_tree
+    tree.nodes.clear()
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    out.location = (400, 0)
+    if backend == "nodes":
+        group = node_group_builder.ensure_group(plan)
+        node = tree.nodes.new("ShaderNodeGroup")
+        node.node_tree = group
+        shader_out, d_out, n1_out = node.outputs["BSDF"], node.outputs["Thickness"], node.outputs["Lower Normal"]
+        n0_out = node.outputs["Upper Normal"]
+    else:
+        node = tree.nodes.new("ShaderNodeScript")
+        node.mode = "INTERNAL"
+        node.script = osl_backend.text_for(plan)
+        osl_backend.compile_script_node(node)
+        shader_out, d_out, n1_out = node.outputs["BSDF"], node.outputs["Thickness"], node.outputs["LowerNormal"]
+        n0_out = node.outputs.get("UpperNormal")
+    node.name = node.label = SHADER_NODE
+    node.width = 220
+    tree.links.new(shader_out, out.inputs["Surface"])
+    aov_d = tree.nodes.new("ShaderNodeOutputAOV")
+    aov_d.aov_name = AOV_THICKNESS
+    aov_d.location = (400, -200)
+    tree.links.new(d_out, aov_d.inputs["Value"])
+    aov_n = tree.nodes.new("ShaderNodeOutputAOV")
+    aov_n.aov_name = AOV_LOWER_NORMAL
+    aov_n.location = (400, -350)
+    tree.links.new(n1_out, aov_n.inputs["Color"])
+    if n0_out is not None:
+        aov_u = tree.nodes.new("ShaderNodeOutputAOV")
+        aov_u.aov_name = AOV_UPPER_NORMAL
+        aov_u.location = (400, -500)
+        tree.links.new(n0_out, aov_u.inputs["Color"])
+    return node
+
+
+def apply_layered_material(target, params: LayeredParams | None = None, backend: str = "nodes",
+                           plan: EffectPlan | None = None, name: str = "Layered BRDF"):
+    """Give ``target`` (an object, its name, or a material) the layered material.
+
+    Idempotent: applying again reuses the material and the node group, rebuilds the
+    material's tree only when the backend or the plan of active effects changed, and
+    otherwise only writes the parameter values into the shader's input sockets.
+    ``plan`` defaults to :func:`plan_effects` of ``params`` (``EffectPlan.full()`` gives
+    the always-full shader).  Returns the material.
+    """
+    params = (params or LayeredParams()).validate()
+    if backend not in BACKENDS:
+        raise ParameterError("backend", backend, "one of 'nodes', 'osl'")
+    if backend == "nodes" and params.lobe != "beckmann":
+        raise ParameterError("lobe", params.lobe, "'beckmann' with the node backend (phong_ramp exists only in OSL)")
+    plan = plan or plan_effects(params)
+    if plan.lobe != params.lobe:
+        plan = EffectPlan(**{**plan.to_dict(), "lobe": params.lobe})
+    mat = _material_for(target, name)
+    node = shader_node(mat)
+    key = f"{backend}:{plan.key}"
+    if node is None or mat.get("layered_brdf_build") != key or not _node_current(node, backend, plan):
+        node = _build_tree(mat, params, backend, plan)
+        mat["layered_brdf_build"] = key
+    set_inputs(node, params)
+    mat["layered_brdf_backend"] = backend
+    mat["layered_brdf_enums"] = {"thickness_mode": params.thickness_mode, "normal_mode": params.normal_mode,
+                                 "lobe": params.lobe}
+    return mat
+
+
+def _node_current(node, backend, plan) -> bool:
+    if backend == "nodes":
+        return node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and \
+            node_group_builder.is_current(node.node_tree, plan)
+    return node.bl_idname == "ShaderNodeScript" and node.script is not None and \
+        node.script.as_string() == osl_backend.source(plan)
+
+
+def remove_layered_material(obj) -> bool:
+    """Remove the add-on's material from ``obj``'s slots; True when one was removed."""
+    removed = False
+    for i, slot in enumerate(obj.material_slots):
+        if slot.material is not None and slot.material.get(MATERIAL_KEY):
+            obj.data.materials.pop(index=i)
+            removed = True
+            break
+    return removed

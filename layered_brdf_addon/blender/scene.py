@@ -1,0 +1,225 @@
+"""The reference sphere scene (docs/reference-scene.md) and rendering it to arrays.
+
+Unit spheres, an orthographic camera, one zero-angle sun, a black world, direct
+light only, a 0.01 px pixel filter (each sample hits the pixel centre, so one sample
+per pixel is exact under a sun), fixed seed, no denoiser, no adaptive sampling, a
+fixed thread count, float EXR with the beauty, normal and AOV passes.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import bmesh
+import bpy
+import numpy as np
+from mathutils import Matrix, Vector
+
+from ..model.sphere import OrthoCamera, Sun
+from .material import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL
+
+SPHERE_SEGMENTS = 256
+SPHERE_RINGS = 128
+
+
+@dataclass
+class SceneSpec:
+    camera: OrthoCamera = field(default_factory=OrthoCamera)
+    sun: Sun = field(default_factory=Sun)
+    centers: tuple = ((0.0, 0.0, 0.0),)
+    samples: int = 1
+    threads: int = 2
+    seed: int = 0
+    osl: bool = False
+
+
+def reset_blender() -> None:
+    """Start from factory settings with an empty file."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+
+
+def row_of_spheres(n: int, spacing: float = 2.2) -> tuple:
+    """Centres of ``n`` unit spheres in a row along x."""
+    return tuple(((k - (n - 1) / 2.0) * spacing, 0.0, 0.0) for k in range(n))
+
+
+def camera_for(n: int, height: int = 64, spacing: float = 2.2, view=(0.0, -1.0, 0.0)) -> OrthoCamera:
+    """A camera framing ``n`` spheres in a row, ``height`` pixels per sphere."""
+    return OrthoCamera(view=view, ortho_scale=spacing * n, width=height * n, height=height)
+
+
+def _sphere_mesh(name: str):
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    bmesh.ops.create_uvsphere(bm, u_segments=SPHERE_SEGMENTS, v_segments=SPHERE_RINGS, radius=1.0)
+    bm.to_mesh(mesh)
+    bm.free()
+    mesh.shade_smooth()
+    return mesh
+
+
+def build_scene(spec: SceneSpec, scene=None):
+    """Create the reference scene in ``scene`` (default: the current one). Returns the spheres."""
+    scene = scene or bpy.context.scene
+    for obj in list(scene.collection.objects):
+        bpy.data.objects.remove(obj)
+    mesh = _sphere_mesh("LayeredSphere")
+    spheres = []
+    for k, c in enumerate(spec.centers):
+        obj = bpy.data.objects.new(f"Sphere{k}", mesh.copy() if k else mesh)
+        obj.location = c
+        scene.collection.objects.link(obj)
+        spheres.append(obj)
+
+    cam_data = bpy.data.cameras.new("RefCamera")
+    cam_data.type = "ORTHO"
+    cam_data.ortho_scale = spec.camera.ortho_scale
+    cam_data.sensor_fit = "AUTO"
+    cam_data.clip_end = 100.0
+    cam = bpy.data.objects.new("RefCamera", cam_data)
+    cam.matrix_world = Matrix(spec.camera.matrix_world().tolist())
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+
+    sun_data = bpy.data.lights.new("RefSun", "SUN")
+    sun_data.energy = spec.sun.strength
+    sun_data.angle = 0.0
+    sun = bpy.data.objects.new("RefSun", sun_data)
+    sun.rotation_mode = "QUATERNION"
+    sun.rotation_quaternion = Vector(spec.sun.l.tolist()).to_track_quat("Z", "Y")
+    scene.collection.objects.link(sun)
+
+    world = bpy.data.worlds.get("RefWorld") or bpy.data.worlds.new("RefWorld")
+    bg = world.node_tree.nodes.get("Background")
+    bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    bg.inputs["Strength"].default_value = 0.0
+    scene.world = world
+
+    r = scene.render
+    r.engine = "CYCLES"
+    r.resolution_x, r.resolution_y = spec.camera.width, spec.camera.height
+    r.resolution_percentage = 100
+    r.threads_mode = "FIXED"
+    r.threads = spec.threads
+    r.use_persistent_data = False
+    r.film_transparent = False
+    c = scene.cycles
+    c.device = "CPU"
+    c.shading_system = spec.osl
+    c.samples = spec.samples
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.seed = spec.seed
+    c.use_animated_seed = False
+    c.filter_width = 0.01
+    c.max_bounces = 0
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    vl = scene.view_layers[0]
+    vl.use_pass_normal = True
+    names = {a.name for a in vl.aovs}
+    for name, kind in ((AOV_THICKNESS, "VALUE"), (AOV_LOWER_NORMAL, "COLOR"), (AOV_UPPER_NORMAL, "COLOR")):
+        if name not in names:
+            aov = vl.aovs.add()
+            aov.name, aov.type = name, kind
+    return spheres
+
+
+@dataclass
+class Passes:
+    """Render passes as arrays with row 0 at the top of the image."""
+
+    beauty: np.ndarray  # (H, W, 3)
+    normal: np.ndarray  # (H, W, 3) Cycles' Normal pass (the closures' average normal)
+    thickness: np.ndarray  # (H, W)
+    lower_normal: np.ndarray  # (H, W, 3)
+    upper_normal: np.ndarray  # (H, W, 3) n0, the shading normal the material used
+    seconds: float = 0.0
+
+
+def read_exr(path) -> dict[str, np.ndarray]:
+    """Channels of a (multilayer) EXR as float arrays, rows top to bottom."""
+    import OpenEXR
+
+    out = {}
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        for part in f.parts:  # Blender writes one part per pass
+            for name, ch in part.channels.items():
+                out[name] = np.asarray(ch.pixels, dtype=np.float64)
+    return out
+
+
+def _stack(ch, prefix, comps):
+    for layer in ("ViewLayer.", ""):
+        keys = [f"{layer}{prefix}.{c}" for c in comps]
+        if all(k in ch for k in keys):
+            return np.stack([ch[k] for k in keys], axis=-1)
+    raise KeyError(f"EXR lacks {prefix} ({', '.join(sorted(ch))[:300]})")
+
+
+def passes_from_exr(path) -> Passes:
+    ch = read_exr(path)
+    beauty = _stack(ch, "Combined", "RGB")
+    normal = _stack(ch, "Normal", "XYZ")
+    try:
+        thick = _stack(ch, AOV_THICKNESS, "X")[..., 0]
+    except KeyError:
+        thick = np.zeros(beauty.shape[:2])
+    aovs = []
+    for name in (AOV_LOWER_NORMAL, AOV_UPPER_NORMAL):
+        try:
+            aovs.append(_stack(ch, name, "RGB"))
+        except KeyError:
+            aovs.append(np.zeros_like(beauty))
+    return Passes(beauty, normal, thick, *aovs)
+
+
+def render_to_exr(path, scene=None) -> float:
+    """Render the scene's camera to a multilayer float EXR; returns the render seconds.
+
+    The file is written under a temporary name and renamed when complete.
+    """
+    import time
+
+    scene = scene or bpy.context.scene
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.partial{os.getpid()}.exr")
+    s = scene.render.image_settings
+    s.media_type = "MULTI_LAYER_IMAGE"  # Blender 5: multilayer EXR
+    s.file_format = "OPEN_EXR_MULTILAYER"
+    s.color_depth = "32"
+    s.exr_codec = "ZIP"
+    scene.render.filepath = str(tmp)
+    scene.render.use_file_extension = False
+    t0 = time.perf_counter()
+    try:
+        bpy.ops.render.render(write_still=True)
+        seconds = time.perf_counter() - t0
+        if not tmp.exists():
+            raise RuntimeError(f"Blender did not write {tmp}")
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return seconds
+
+
+def render_passes(scene=None, keep: str | os.PathLike | None = None) -> Passes:
+    """Render and return the passes (EXR in a temporary folder unless ``keep`` names a path)."""
+    if keep is not None:
+        seconds = render_to_exr(keep, scene)
+        p = passes_from_exr(keep)
+    else:
+        with tempfile.TemporaryDirectory(prefix="layered_brdf_") as tmp:
+            path = Path(tmp) / "render.exr"
+            seconds = render_to_exr(path, scene)
+            p = passes_from_exr(path)
+    p.seconds = seconds
+    return p

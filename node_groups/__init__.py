@@ -1,0 +1,1 @@
+"""Node groups built by code: the layered BRDF from stock Cycles/EEVEE nodes."""

@@ -1,0 +1,289 @@
+"""Blender shader-node backend of the shading program.
+
+Values are :class:`Expr` (an output socket and its kind, ``"float"`` or
+``"vector"``) or Python floats (constants, folded into node inputs).  Every
+operation adds one node; Blender's Math nodes are already guarded (division by
+zero gives 0, square roots of negatives 0), which matches ``ops_numpy``.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+Number = (int, float)
+
+
+class Expr:
+    __slots__ = ("ops", "socket", "kind", "depth")
+
+    def __init__(self, ops: "NodeOps", socket, kind: str, depth: int = 0):
+        self.ops, self.socket, self.kind, self.depth = ops, socket, kind, depth
+
+    # arithmetic ----------------------------------------------------------
+    def _bin(self, other, op, reverse=False):
+        a, b = (other, self) if reverse else (self, other)
+        return self.ops.binary(op, a, b)
+
+    def __add__(self, o):
+        return self._bin(o, "ADD")
+
+    def __radd__(self, o):
+        return self._bin(o, "ADD", True)
+
+    def __sub__(self, o):
+        return self._bin(o, "SUBTRACT")
+
+    def __rsub__(self, o):
+        return self._bin(o, "SUBTRACT", True)
+
+    def __mul__(self, o):
+        return self._bin(o, "MULTIPLY")
+
+    def __rmul__(self, o):
+        return self._bin(o, "MULTIPLY", True)
+
+    def __truediv__(self, o):
+        return self._bin(o, "DIVIDE")
+
+    def __rtruediv__(self, o):
+        return self._bin(o, "DIVIDE", True)
+
+    def __neg__(self):
+        return self * -1.0
+
+
+def _kind(x) -> str:
+    if isinstance(x, Expr):
+        return x.kind
+    if isinstance(x, Number):
+        return "float"
+    if isinstance(x, (tuple, list)) and len(x) == 3:
+        return "vector"
+    raise TypeError(f"not a shader value: {x!r}")
+
+
+class NodeOps:
+    """Adds nodes to ``tree``; lays them out in columns by dependency depth."""
+
+    COLUMN = 170
+    ROW = 150
+
+    def __init__(self, tree, x0: float = 0.0, y0: float = 0.0, subgroup_name=None, stamp=""):
+        self.tree = tree
+        self.stamp = stamp
+        self.subgroup_name = subgroup_name or (lambda key: f"{tree.name} {key}")
+        self.x0, self.y0 = x0, y0
+        self._rows: dict[int, int] = {}
+        self._memo: dict = {}
+        self.count = 0
+
+    # node plumbing ---------------------------------------------------------
+    @staticmethod
+    def _key_of(value):
+        if isinstance(value, Expr):
+            return ("s", value.socket.as_pointer())
+        if isinstance(value, Number):
+            return ("c", float(value))
+        return ("v", tuple(float(c) for c in value))
+
+    def node(self, idname: str, inputs: dict[Any, Any] = (), depth: int | None = None, **props):
+        """Add a node, or reuse an identical one (same type, settings and inputs)."""
+        inputs = dict(inputs)
+        key = None
+        if depth is None:
+            key = (idname, tuple(sorted((k, str(v)) for k, v in props.items())),
+                   tuple(sorted((str(k), self._key_of(v)) for k, v in inputs.items())))
+            if key in self._memo:
+                return self._memo[key]
+        n = self.tree.nodes.new(idname)
+        for k, v in props.items():
+            setattr(n, k, v)
+        dmax = 0
+        for name, value in inputs.items():
+            sock = self._input(n, name)
+            if isinstance(value, Expr):
+                self.tree.links.new(value.socket, sock)
+                dmax = max(dmax, value.depth)
+            elif isinstance(value, Number):
+                sock.default_value = float(value)
+            else:
+                sock.default_value = tuple(float(c) for c in value)
+        d = dmax + 1 if depth is None else depth
+        row = self._rows.get(d, 0)
+        self._rows[d] = row + 1
+        n.location = (self.x0 + d * self.COLUMN, self.y0 - row * self.ROW)
+        n.hide = True
+        self.count += 1
+        if key is not None:
+            self._memo[key] = (n, d)
+        return n, d
+
+    @staticmethod
+    def _input(node, key):
+        if isinstance(key, int):
+            return node.inputs[key]
+        for s in node.inputs:
+            if s.identifier == key and s.enabled:
+                return s
+        for s in node.inputs:
+            if s.identifier == key:
+                return s
+        return node.inputs[key]
+
+    def out(self, node, depth, key, kind) -> Expr:
+        sock = node.outputs[key] if isinstance(key, int) else next(s for s in node.outputs if s.identifier == key)
+        return Expr(self, sock, kind, depth)
+
+    def math(self, op, a, b=0.0, c=None) -> Expr:
+        ins = {0: a, 1: b}
+        if c is not None:
+            ins[2] = c
+        n, d = self.node("ShaderNodeMath", ins, operation=op)
+        return self.out(n, d, 0, "float")
+
+    def vmath(self, op, a, b=(0.0, 0.0, 0.0), scale=None, result="vector") -> Expr:
+        ins = {0: a, 1: b}
+        if scale is not None:
+            ins[3] = scale
+        n, d = self.node("ShaderNodeVectorMath", ins, operation=op)
+        return self.out(n, d, 1 if result == "float" else 0, result)
+
+    # binary dispatch -----------------------------------------------------
+    def binary(self, op, a, b):
+        ka, kb = _kind(a), _kind(b)
+        # Algebraic identities with constants add no node.
+        if op == "MULTIPLY" and ((isinstance(a, Number) and a == 0.0) or (isinstance(b, Number) and b == 0.0)):
+            return 0.0 if "vector" not in (ka, kb) else (0.0, 0.0, 0.0)
+        if op == "MULTIPLY" and isinstance(a, Number) and a == 1.0:
+            return b
+        if op in ("MULTIPLY", "DIVIDE") and isinstance(b, Number) and b == 1.0:
+            return a
+        if op == "ADD" and isinstance(a, Number) and a == 0.0 and kb == "float":
+            return b
+        if op in ("ADD", "SUBTRACT") and isinstance(b, Number) and b == 0.0 and ka == "float":
+            return a
+        if ka == "float" and kb == "float":
+            if isinstance(a, Number) and isinstance(b, Number):
+                return {"ADD": a + b, "SUBTRACT": a - b, "MULTIPLY": a * b,
+                        "DIVIDE": a / b if b != 0 else 0.0}[op]
+            return self.math(op, a, b)
+        if ka == "vector" and kb == "vector":
+            return self.vmath(op, a, b)
+        if ka == "vector" and kb == "float" and op in ("MULTIPLY", "DIVIDE"):
+            s = b if op == "MULTIPLY" else (1.0 / b if isinstance(b, Number) else self.math("DIVIDE", 1.0, b))
+            return self.vmath("SCALE", a, scale=s)
+        if ka == "float" and kb == "vector" and op == "MULTIPLY":
+            return self.vmath("SCALE", b, scale=a)
+        raise TypeError(f"unsupported {op} between {ka} and {kb}")
+
+    # the ops interface of the shading program ------------------------------
+    def clamp(self, x, lo, hi):
+        if isinstance(x, Number):
+            return min(max(x, lo), hi)
+        n, d = self.node("ShaderNodeClamp", {"Value": x, "Min": lo, "Max": hi})
+        return self.out(n, d, 0, "float")
+
+    def sqrt(self, x):
+        return math.sqrt(max(x, 0.0)) if isinstance(x, Number) else self.math("SQRT", x)
+
+    def exp(self, x):
+        if isinstance(x, Number):
+            return math.exp(min(x, 80.0))
+        return self.math("EXPONENT", self.math("MINIMUM", x, 80.0))
+
+    def cos(self, x):
+        return math.cos(x) if isinstance(x, Number) else self.math("COSINE", x)
+
+    def sin(self, x):
+        return math.sin(x) if isinstance(x, Number) else self.math("SINE", x)
+
+    def atan2(self, y, x):
+        return self.math("ARCTAN2", y, x)
+
+    def maximum(self, a, b):
+        if isinstance(a, Number) and isinstance(b, Number):
+            return max(a, b)
+        return self.math("MAXIMUM", a, b)
+
+    def minimum(self, a, b):
+        if isinstance(a, Number) and isinstance(b, Number):
+            return min(a, b)
+        return self.math("MINIMUM", a, b)
+
+    def lt(self, a, b):
+        return self.math("LESS_THAN", a, b)
+
+    def gt(self, a, b):
+        return self.math("GREATER_THAN", a, b)
+
+    def select(self, c, a, b):
+        if isinstance(a, Number) and isinstance(b, Number) and a == b:
+            return a
+        n, d = self.node("ShaderNodeMix", {"Factor_Float": c, "A_Float": b, "B_Float": a}, data_type="FLOAT",
+                         clamp_factor=True)
+        return self.out(n, d, "Result_Float", "float")
+
+    def select_vec(self, c, a, b):
+        n, d = self.node("ShaderNodeMix", {"Factor_Float": c, "A_Vector": b, "B_Vector": a}, data_type="VECTOR",
+                         factor_mode="UNIFORM", clamp_factor=True)
+        return self.out(n, d, "Result_Vector", "vector")
+
+    def dot(self, a, b):
+        return self.vmath("DOT_PRODUCT", a, b, result="float")
+
+    def length(self, a):
+        return self.vmath("LENGTH", a, result="float")
+
+    def cross(self, a, b):
+        return self.vmath("CROSS_PRODUCT", a, b)
+
+    def normalize(self, v, fallback):
+        """Unit ``v``; ``fallback`` where ``|v|^2 <= 1e-20`` (and where it is NaN: comparisons fail)."""
+        ok = self.gt(self.dot(v, v), 1e-20)
+        return self.select_vec(ok, self.vmath("NORMALIZE", v), fallback)
+
+    # sub-programs -----------------------------------------------------------
+    def call(self, name, fn, inputs, **static):
+        """Instance of a sub-group running ``fn`` (built once per name and static settings)."""
+        key = name + "".join(f" {k}={v}" for k, v in sorted(static.items()))
+        group = self._subgroup(key, fn, inputs, static)
+        n, d = self.node("ShaderNodeGroup", {k: v for k, v in inputs.items()}, node_tree=group)
+        return {s.name: Expr(self, s, "vector" if s.type == "VECTOR" else "float", d) for s in n.outputs}
+
+    def _subgroup(self, key, fn, inputs, static):
+        import bpy
+
+        name = self.subgroup_name(key)
+        group = bpy.data.node_groups.get(name)
+        if group is not None and group.library is None and group.get("layered_brdf_stamp") == self.stamp:
+            return group  # current: shared by every group that uses it
+        if group is None or group.library is not None:
+            group = bpy.data.node_groups.new(name, "ShaderNodeTree")
+        # Rebuilding in place keeps the instances in other groups pointing at it, but their
+        # links to the old sockets are lost: callers rebuild those groups (stamps differ too).
+        group.nodes.clear()
+        group.interface.clear()
+        for k, v in inputs.items():
+            kind = _kind(v)
+            group.interface.new_socket(k, in_out="INPUT",
+                                       socket_type="NodeSocketVector" if kind == "vector" else "NodeSocketFloat")
+        sub = NodeOps(group, x0=200.0, subgroup_name=self.subgroup_name, stamp=self.stamp)
+        gin = group.nodes.new("NodeGroupInput")
+        gin.location = (-200.0, 0.0)
+        args = {k: Expr(sub, gin.outputs[k], _kind(v), 0) for k, v in inputs.items()}
+        outs = fn(sub, **args, **static)
+        gout = group.nodes.new("NodeGroupOutput")
+        for k, v in outs.items():
+            kind = _kind(v)
+            group.interface.new_socket(k, in_out="OUTPUT",
+                                       socket_type="NodeSocketVector" if kind == "vector" else "NodeSocketFloat")
+        for k, v in outs.items():
+            if isinstance(v, Expr):
+                group.links.new(v.socket, gout.inputs[k])
+            else:
+                gout.inputs[k].default_value = v
+        gout.location = (sub.x0 + (max(sub._rows, default=0) + 2) * sub.COLUMN, 0.0)
+        group["layered_brdf_node_count"] = sub.count
+        group["layered_brdf_stamp"] = self.stamp
+        self.count += sub.count
+        return group
