@@ -12,8 +12,8 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import bpy  # first: it makes bmesh and mathutils importable
 import bmesh
-import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
@@ -223,3 +223,73 @@ def render_passes(scene=None, keep: str | os.PathLike | None = None) -> Passes:
             p = passes_from_exr(path)
     p.seconds = seconds
     return p
+
+
+def _scripted_materials(scene):
+    from .material import SHADER_NODE
+
+    mats = set()
+    for obj in scene.objects:
+        for slot in getattr(obj, "material_slots", []):
+            m = slot.material
+            if m is not None and m.node_tree is not None:
+                node = m.node_tree.nodes.get(SHADER_NODE)
+                if node is not None and node.bl_idname == "ShaderNodeScript":
+                    mats.add(m)
+    return mats
+
+
+def render_passes_osl(scene=None) -> Passes:
+    """Passes of a scene whose layered materials use the OSL backend.
+
+    Cycles writes no AOV under OSL shading, so the thickness and the normals are
+    rendered in extra passes that route the script's outputs into an emission shader
+    (normals encoded as ``0.5 + 0.5 n``); the materials are restored afterwards.
+    """
+    from .material import SHADER_NODE
+
+    scene = scene or bpy.context.scene
+    beauty = render_passes(scene)
+    extra = {}
+    for output, encode in (("Thickness", False), ("LowerNormal", True), ("UpperNormal", True)):
+        saved = []
+        for m in _scripted_materials(scene):
+            tree = m.node_tree
+            node = tree.nodes[SHADER_NODE]
+            out_node = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+            old = [l.from_socket for l in out_node.inputs["Surface"].links]
+            emit = tree.nodes.new("ShaderNodeEmission")
+            emit.inputs["Strength"].default_value = 1.0
+            src = node.outputs.get(output)
+            added = [emit]
+            if src is None:
+                continue
+            if encode:
+                vm = tree.nodes.new("ShaderNodeVectorMath")
+                vm.operation = "MULTIPLY_ADD"
+                vm.inputs[1].default_value = (0.5, 0.5, 0.5)
+                vm.inputs[2].default_value = (0.5, 0.5, 0.5)
+                tree.links.new(src, vm.inputs[0])
+                src = vm.outputs[0]
+                added.append(vm)
+            tree.links.new(src, emit.inputs["Color"])
+            tree.links.new(emit.outputs[0], out_node.inputs["Surface"])
+            saved.append((tree, out_node, old, added))
+        if not saved:
+            continue
+        try:
+            p = render_passes(scene)
+        finally:
+            for tree, out_node, old, added in saved:
+                for n in added:
+                    tree.nodes.remove(n)
+                for s in old:
+                    tree.links.new(s, out_node.inputs["Surface"])
+        extra[output] = (p.beauty * 2.0 - 1.0) if encode else p.beauty[..., 0]
+    if "Thickness" in extra:
+        beauty.thickness = extra["Thickness"]
+    if "LowerNormal" in extra:
+        beauty.lower_normal = extra["LowerNormal"]
+    if "UpperNormal" in extra:
+        beauty.upper_normal = extra["UpperNormal"]
+    return beauty

@@ -148,13 +148,15 @@ def exact_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTH
 
 
 def render_spheres(params_list, camera: OrthoCamera, sun: Sun, centers=((0.0, 0.0, 0.0),), *,
-                   normals=None, thickness=None, lower_normals=None, shading=exact_shading):
+                   normals=None, thickness=None, lower_normals=None, shading=exact_shading,
+                   prefer_analytic=False):
     """Expected image (H, W, 3) of spheres, sphere ``k`` carrying ``params_list[k]``.
 
     ``normals``, ``thickness`` and ``lower_normals`` (per-pixel arrays, e.g. read from the
     render's passes) replace the analytic sphere normal, the thickness pattern and the lower
     normal where given; a noise pattern needs ``thickness`` (numpy does not evaluate Blender's
     noise).  ``shading`` is :func:`exact_shading` or a closure form with the same signature.
+    With ``prefer_analytic``, ``thickness`` is used only where numpy cannot compute ``d``.
     Returns ``(image, geometry)``; ``geometry.extra`` holds the ``d`` and ``n1`` used.
     """
     if isinstance(params_list, LayeredParams):
@@ -171,7 +173,7 @@ def render_spheres(params_list, camera: OrthoCamera, sun: Sun, centers=((0.0, 0.
         n0 = n0_all[sel]
         p = geo.p_object[sel]
         field_ = thickness_field(params)
-        if thickness is not None:
+        if thickness is not None and not (prefer_analytic and field_ is not None):
             d = np.asarray(thickness)[sel]
         elif field_ is not None:
             d = field_(p)

@@ -1,0 +1,43 @@
+"""Shared set-up of the render tests: one scene per module, several spheres per image."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from layered_brdf_addon.model.sphere import OrthoCamera, Sun
+
+SUN_40 = Sun(direction=(np.sin(np.radians(40.0)), -np.cos(np.radians(40.0)), 0.0), strength=1.0)
+
+
+@dataclass
+class RenderedRow:
+    params: list
+    camera: OrthoCamera
+    sun: Sun
+    centers: tuple
+    passes: object
+    backend: str
+    materials: list
+
+
+def render_row(params_list, backend="nodes", sun=SUN_40, height=64, samples=1, plans=None):
+    """Reset Blender, put one sphere per parameter set in a row, render once."""
+    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.material import apply_layered_material
+
+    S.reset_blender()
+    n = len(params_list)
+    cam = S.camera_for(n, height)
+    centers = S.row_of_spheres(n)
+    spheres = S.build_scene(S.SceneSpec(camera=cam, sun=sun, centers=centers, samples=samples,
+                                        osl=(backend == "osl")))
+    mats = []
+    for k, (obj, p) in enumerate(zip(spheres, params_list)):
+        plan = plans[k] if plans else None
+        mats.append(apply_layered_material(obj, p, backend, plan=plan, name=f"Layered{k}"))
+    if backend == "osl":
+        passes = S.render_passes_osl()
+    else:
+        passes = S.render_passes()
+    return RenderedRow(list(params_list), cam, sun, centers, passes, backend, mats)
