@@ -51,6 +51,9 @@ def _ensure_oslquery():
         sys.path.append(path)
 
 
+_ensure_oslquery()  # before any Script node update runs Cycles' own compile callback
+
+
 class OSLCompileError(RuntimeError):
     pass
 

@@ -293,3 +293,31 @@ def render_passes_osl(scene=None) -> Passes:
     if "UpperNormal" in extra:
         beauty.upper_normal = extra["UpperNormal"]
     return beauty
+
+
+def set_uniform_environment(radiance: float = 1.0, scene=None) -> None:
+    """Replace the lights by a uniform white world of the given radiance."""
+    scene = scene or bpy.context.scene
+    for obj in list(scene.objects):
+        if obj.type == "LIGHT":
+            bpy.data.objects.remove(obj)
+    bg = scene.world.node_tree.nodes["Background"]
+    bg.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    bg.inputs["Strength"].default_value = radiance
+
+
+def set_area_light(matrix, size: float, power: float, scene=None):
+    """Replace the lights by one square area light (world matrix ``matrix``, emitting along -Z)."""
+    scene = scene or bpy.context.scene
+    for obj in list(scene.objects):
+        if obj.type == "LIGHT":
+            bpy.data.objects.remove(obj)
+    data = bpy.data.lights.new("RefArea", "AREA")
+    data.shape = "SQUARE"
+    data.size = size
+    data.energy = power
+    data.spread = np.pi
+    obj = bpy.data.objects.new("RefArea", data)
+    obj.matrix_world = Matrix(np.asarray(matrix).tolist())
+    scene.collection.objects.link(obj)
+    return obj

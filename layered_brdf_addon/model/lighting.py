@@ -1,0 +1,99 @@
+"""Monte Carlo integration of the exact model under lights other than a sun.
+
+Used to check renders lit by a uniform environment or an area light: the pixel is
+``int f(l, v) L(l) <n0, l> dl`` over the hemisphere (or over the light's area).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .brdf import diffuse_rho, specular_brdf
+from .geometry import dot, reflect, safe_normalize
+from .params import WAVELENGTHS_NM, LayeredParams
+
+
+def _frame(n):
+    """Orthonormal tangents (t, b) for unit normals n (..., 3)."""
+    a = np.where(np.abs(n[..., :1]) > 0.9, np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0]))
+    t = safe_normalize(np.cross(a, n))
+    return t, np.cross(n, t)
+
+
+def _phong_dirs(axis, k, u1, u2):
+    cos_t = u1 ** (1.0 / (k + 1.0))
+    sin_t = np.sqrt(np.maximum(1.0 - cos_t ** 2, 0.0))
+    phi = 2.0 * np.pi * u2
+    t, b = _frame(axis)
+    return (t * (sin_t * np.cos(phi))[..., None] + b * (sin_t * np.sin(phi))[..., None]
+            + axis * cos_t[..., None])
+
+
+def _phong_pdf(axis, k, l):
+    c = np.maximum(dot(axis, l), 0.0)
+    return (k + 1.0) / (2.0 * np.pi) * c ** k
+
+
+def brdf_times_cos(params: LayeredParams, n0, n1, d, v, l, wavelengths=WAVELENGTHS_NM):
+    """``f(l, v) <n0, l>`` per channel for arrays of light directions ``l``."""
+    p = params
+    cos_l = np.maximum(dot(n0, l), 0.0)
+    fs = specular_brdf(-l, np.broadcast_to(v, l.shape), n0, n1, p.r1, d, p.e0, p.e1, p.r0, wavelengths, ng=n0)
+    fd = diffuse_rho(p.r1, d, p.r0, wavelengths) * np.asarray(p.base_color) / np.pi
+    return cos_l[..., None] * (p.ks * fs + p.kd * fd)
+
+
+def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1.0, samples: int = 2048,
+                        seed: int = 0, wavelengths=WAVELENGTHS_NM):
+    """Pixels (P, 3) under a uniform environment of ``radiance``, by Monte Carlo.
+
+    Directions come from a mixture of cosine sampling (1/3) and a Phong lobe about the
+    mirror direction (2/3, exponent half the narrower of ``e0`` and ``e1 / r1^2``); the
+    estimator divides by the mixture density, so it is unbiased for any parameters.
+    """
+    rng = np.random.default_rng(seed)
+    n0 = np.asarray(n0, dtype=float)
+    P = n0.shape[0]
+    v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
+    r_v = reflect(-v, n0)
+    k = 0.5 * min(params.e0, params.e1 / max(params.r1) ** 2)
+    out = np.zeros((P, 3))
+    for _ in range(samples):
+        u1, u2, u3 = rng.random(P), rng.random(P), rng.random(P)
+        cos_dir = _phong_dirs(n0, 1.0, u1, u2)  # cos^1 about n0 = cosine sampling
+        lobe_dir = _phong_dirs(r_v, k, u1, u2)
+        l = np.where((u3 < 1.0 / 3.0)[..., None], cos_dir, lobe_dir)
+        pdf = _phong_pdf(n0, 1.0, l) / 3.0 + 2.0 / 3.0 * _phong_pdf(r_v, k, l)
+        val = brdf_times_cos(params, n0, n1, d, v, l, wavelengths)
+        out += np.where(pdf[..., None] > 0, val / np.where(pdf > 0, pdf, 1.0)[..., None], 0.0)
+    return radiance * out / samples
+
+
+def area_light_shading(params: LayeredParams, n0, n1, d, v, points, light_matrix, size: float, power: float,
+                       samples: int = 1024, seed: int = 0, wavelengths=WAVELENGTHS_NM):
+    """Pixels (P, 3) lit by a square area light (Blender's: radiance ``power / (pi A)``,
+    emitting along its local -Z), by stratified sampling of the light's surface."""
+    rng = np.random.default_rng(seed)
+    m = np.asarray(light_matrix, dtype=float)
+    centre, ax, ay, az = m[:3, 3], m[:3, 0], m[:3, 1], m[:3, 2]
+    area = size * size
+    radiance = power / (np.pi * area)
+    n0 = np.asarray(n0, dtype=float)
+    P = n0.shape[0]
+    v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
+    side = int(np.ceil(np.sqrt(samples)))
+    out = np.zeros((P, 3))
+    count = 0
+    for i in range(side):
+        for j in range(side):
+            jit = rng.random((P, 2))
+            x = ((i + jit[:, 0]) / side - 0.5) * size
+            y = ((j + jit[:, 1]) / side - 0.5) * size
+            q = centre + x[:, None] * ax + y[:, None] * ay
+            w = q - points
+            r2 = dot(w, w)
+            l = w / np.sqrt(r2)[..., None]
+            cos_light = np.maximum(dot(-l, -az), 0.0)  # the light emits along -Z
+            val = brdf_times_cos(params, n0, n1, d, v, l, wavelengths)
+            out += val * (cos_light / r2)[..., None]
+            count += 1
+    return radiance * area * out / count
