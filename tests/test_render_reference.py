@@ -28,9 +28,14 @@ NAMES = list(CASES)
 BACKENDS = ["nodes", "osl"]
 
 
-@pytest.fixture(scope="module", params=BACKENDS)
-def row(request):
-    return render_row([CASES[n] for n in NAMES], backend=request.param)
+@pytest.fixture(scope="module")
+def rows():
+    return {b: render_row([CASES[n] for n in NAMES], backend=b) for b in BACKENDS}
+
+
+@pytest.fixture(params=BACKENDS)
+def row(request, rows):
+    return rows[request.param]
 
 
 def _expected(row, shading=exact_shading, use_aov_thickness=True):
@@ -110,3 +115,13 @@ def test_thin_layers_red_thicker_green_blue(row):
     thick = row.passes.beauty[mask_thick].mean(0)
     assert thin[0] > thin[1] > thin[2]
     assert max(thick[1], thick[2]) > thick[0]
+
+
+@pytest.mark.parametrize("name", ["diffuse_height", "diffuse_noise", "parallel", "tilted"])
+def test_osl_and_nodes_agree(rows, name):
+    a, b = rows["osl"], rows["nodes"]
+    _, geo = _expected(b)
+    mask = lit_mask(geo, b.sun.l) & _sphere(geo, name)
+    ag = agreement(a.passes.beauty, b.passes.beauty, mask, rel_tol=0.02)
+    print(f"{name}: OSL vs nodes {ag}; render seconds OSL {a.passes.seconds:.2f}, nodes {b.passes.seconds:.2f}")
+    assert ag.failing_fraction <= 0.01, str(ag)
