@@ -7,7 +7,8 @@ import numpy as np
 
 from layered_brdf_addon.model.sphere import OrthoCamera, Sun
 
-SUN_40 = Sun(direction=(np.sin(np.radians(40.0)), -np.cos(np.radians(40.0)), 0.0), strength=1.0)
+# The sun is 40 degrees off the view, above it: spheres in a row along x never shadow each other.
+SUN_40 = Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=1.0)
 
 
 @dataclass

@@ -1,0 +1,283 @@
+"""Command line: ``python -m layered_brdf_addon [gallery|render|batch] ...``.
+
+``gallery`` (the default) renders the paper's Figs. 3-6 as one contact sheet;
+``render`` renders one material on the reference sphere or on an object of a .blend;
+``batch`` renders the jobs of a TOML/JSON file, serially or on Dask.  The options of
+the material's parameters are derived from
+:data:`~layered_brdf_addon.model.params.PARAM_SPECS`.
+
+Exit codes: 0 success; 1 a render or a batch job failed; 2 invalid input (nothing
+written); 130 interrupted (no partial files left).
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import sys
+from pathlib import Path
+from typing import Any, Iterator, Sequence
+
+from . import __version__
+from .model.params import PARAM_SPECS, ParameterError, ParamSpec
+from .model.presets import ARTIST_PRESETS, PAPER_PRESETS
+
+PROG = "layered-brdf"
+COMMANDS = ("gallery", "render", "batch")
+EXIT_OK, EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+# ---------------------------------------------------------------------------
+# options derived from the parameter specs
+def _number(text: str) -> Any:
+    """A float where the text is a number; the text itself otherwise (validation names it)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _range_text(spec: ParamSpec) -> str:
+    parts = [f"allowed {spec.allowed}"]
+    if spec.soft_min is not None and spec.soft_max is not None:
+        parts.append(f"typical {spec.soft_min:g}-{spec.soft_max:g}")
+    return "; ".join(parts)
+
+
+def param_help(spec: ParamSpec) -> str:
+    """Help text of a parameter's option: description, unit, range, default."""
+    default = f"{spec.default:g}" if spec.kind == "float" else str(spec.default)
+    unit = f" {spec.unit}" if spec.unit and spec.kind == "float" else ""
+    text = f"{spec.description} ({_range_text(spec)}; default {default}{unit})"
+    return text.replace("%", "%%")
+
+
+def param_metavar(spec: ParamSpec) -> str | None:
+    if spec.kind == "enum":
+        return "{" + ",".join(spec.options) + "}"
+    if spec.unit and spec.unit.replace("/", "").isalpha():
+        return spec.unit.upper().replace("/", "_PER_") if "/" in spec.unit else spec.unit.upper()
+    return "X"
+
+
+def add_param_options(parser: argparse.ArgumentParser) -> None:
+    """One option per parameter of PARAM_SPECS (``d_min`` -> ``--d-min NM``), grouped like the specs."""
+    groups: dict[str, argparse._ArgumentGroup] = {}
+    for spec in PARAM_SPECS:
+        group = groups.get(spec.group)
+        if group is None:
+            group = groups[spec.group] = parser.add_argument_group(
+                f"material parameters: {spec.group.lower()}",
+                "override the preset / params file; unset ones keep their value")
+        flag = "--" + spec.name.replace("_", "-")
+        if spec.kind == "bool":
+            group.add_argument(flag, dest=spec.name, action=argparse.BooleanOptionalAction, default=None,
+                               help=param_help(spec))
+        elif spec.kind == "enum":
+            group.add_argument(flag, dest=spec.name, choices=spec.options, default=None,
+                               metavar=param_metavar(spec), help=param_help(spec))
+        else:
+            group.add_argument(flag, dest=spec.name, type=_number, default=None, metavar=param_metavar(spec),
+                               help=param_help(spec))
+
+
+def _add_scene_options(p: argparse.ArgumentParser, samples_help: str) -> None:
+    p.add_argument("--backend", choices=("nodes", "osl"), default=None,
+                   help="shader backend: the generated node group (default) or the OSL script")
+    p.add_argument("--samples", default=None, metavar="N", help=samples_help)
+    p.add_argument("--sun", nargs=3, default=None, metavar=("X", "Y", "Z"),
+                   help="direction from the scene towards the zero-angle sun (default 0.5 -1 0.6)")
+    p.add_argument("--sun-strength", dest="sun_strength", default=None, metavar="W_PER_M2",
+                   help="sun irradiance (default 3)")
+    p.add_argument("--seed", default=None, metavar="N", help="Cycles' sampling seed (default 0)")
+    p.add_argument("--threads", default=None, metavar="N", help="Cycles render threads (default 2)")
+    p.add_argument("--verbose", action="store_true", help="show Blender's own log")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of all sub-commands."""
+    parser = argparse.ArgumentParser(
+        prog=PROG, description="Render iridescent layered materials (Granier & Heidrich 2003) with Blender. "
+        "Without a command, renders the gallery.",
+        epilog="exit codes: 0 ok, 1 a render or job failed, 2 invalid input (nothing written), 130 interrupted")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="{gallery,render,batch}")
+
+    g = sub.add_parser("gallery", help="the paper's Figs. 3-6 in one labelled contact sheet (default)",
+                       description="Render every configuration of the paper's Figs. 3-6 (presets "
+                       + ", ".join(PAPER_PRESETS) + ") as spheres in one scene, one render, and compose "
+                       "a labelled contact sheet STEM.png, with STEM.exr and the sidecar STEM.json.")
+    g.add_argument("--output", default=None, metavar="PATH", help="the contact sheet (default out/gallery.png)")
+    g.add_argument("--size", default=None, metavar="PX", help="pixels per tile (default 128)")
+    g.add_argument("--columns", default=None, metavar="N", help="tiles per row (default: a square grid)")
+    _add_scene_options(g, "samples per pixel (default 16; one is exact under the sun, more anti-alias)")
+
+    r = sub.add_parser("render", help="one material on the reference sphere or on an object of a .blend",
+                       description="Render one material; write STEM.png (sRGB, Standard view transform), "
+                       "STEM.exr (float: beauty, normal, thickness, lower and upper normal) and STEM.json "
+                       "(every parameter, camera, sun, timing: enough to predict the pixels).")
+    src = r.add_argument_group("material")
+    src.add_argument("--preset", default=None, metavar="NAME",
+                     help="a named material: " + ", ".join(list(PAPER_PRESETS) + list(ARTIST_PRESETS)))
+    src.add_argument("--params", default=None, metavar="FILE",
+                     help="parameter values from a .json or .toml file (a render's sidecar works too)")
+    scn = r.add_argument_group("scene")
+    scn.add_argument("--blend", default=None, metavar="FILE",
+                     help="render this .blend's camera instead of the reference sphere")
+    scn.add_argument("--object", default=None, metavar="NAME", help="the object of --blend that gets the material")
+    scn.add_argument("--resolution", default=None, metavar="N|WxH",
+                     help="image size (reference sphere: default 128; .blend: default the file's)")
+    _add_scene_options(scn, "samples per pixel (reference sphere: default 1, exact under a zero-angle sun; "
+                       ".blend: default the file's)")
+    out = r.add_argument_group("output")
+    out.add_argument("--output", default=None, metavar="PATH",
+                     help="output stem: writes PATH.png, PATH.exr, PATH.json (default out/PRESET)")
+    out.add_argument("--name", default=None, metavar="TEXT", help="a name recorded in the sidecar")
+    add_param_options(r)
+
+    b = sub.add_parser("batch", help="render the jobs of a TOML or JSON job file",
+                       description="Render every job of JOBFILE, each in a fresh subprocess. A job has the "
+                       "options of 'render' (e.g. preset = \"fig4_tilted\", d_min = 80, samples = 4). "
+                       "Failing jobs are reported; the others still run; the exit code is 1 if any failed.")
+    b.add_argument("jobfile", metavar="JOBFILE", help="a .toml ([defaults] and [[job]] tables) or .json file")
+    b.add_argument("--jobs", default="1", metavar="N",
+                   help="parallel jobs on a local Dask cluster of N single-threaded workers (default 1: serial)")
+    b.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run the jobs as tasks on a Dask scheduler's workers, e.g. tcp://host:8786")
+    b.add_argument("--output-dir", dest="output_dir", default=None, metavar="DIR",
+                   help="folder of relative job outputs (default out/batch); other paths in a job are "
+                   "relative to the job file")
+    b.add_argument("--timeout", default=None, metavar="SECONDS", help="stop a job after this long")
+    b.add_argument("--report", default=None, metavar="FILE.json", help="also write the results as JSON")
+    b.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    return parser
+
+
+# ---------------------------------------------------------------------------
+@contextlib.contextmanager
+def blender_output(verbose: bool) -> Iterator[None]:
+    """Send what Blender prints on stdout (render progress) to /dev/null unless ``verbose``."""
+    if verbose:
+        yield
+        return
+    import ctypes
+    import os
+
+    sys.stdout.flush()
+    saved = os.dup(1)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    libc = ctypes.CDLL(None)
+    try:
+        os.dup2(devnull, 1)
+        yield
+    finally:
+        libc.fflush(None)
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(devnull)
+
+
+def _options(ns: argparse.Namespace, names: Sequence[str]) -> dict[str, Any]:
+    return {n: getattr(ns, n) for n in names if getattr(ns, n, None) is not None}
+
+
+def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
+    """``render``: validate, then render one request in this process."""
+    from .batch import RUN_OPTIONS, PARAM_NAMES, execute_render, follow_parent, request_from_options
+
+    follow_parent()
+    req = request_from_options(_options(ns, RUN_OPTIONS + PARAM_NAMES))
+    with blender_output(ns.verbose):
+        sidecar = execute_render(req, command=[sys.executable, "-m", "layered_brdf_addon", *argv])
+    p = req.paths
+    print(f"wrote {p.png}\n      {p.exr}\n      {p.json}\n"
+          f"render {sidecar['render_seconds']:.2f} s, total {sidecar['total_seconds']:.2f} s "
+          f"({req.backend}, {sidecar['samples']} spp, {sidecar['camera']['width']}x{sidecar['camera']['height']})")
+    return EXIT_OK
+
+
+def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
+    """``gallery``: render the paper's configurations into one labelled contact sheet."""
+    from .gallery import render_gallery, settings_from_options, summary_rows
+    from .outputs import format_table
+
+    s = settings_from_options(_options(ns, ("output", "size", "samples", "backend", "columns", "sun",
+                                            "sun_strength", "seed", "threads")))
+    with blender_output(ns.verbose):
+        res = render_gallery(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv])
+    headers, rows = summary_rows(res)
+    print(format_table(headers, rows))
+    w, h = res.layout.sheet_size
+    print(f"\none render of {len(res.tiles)} spheres ({s.size} px, {s.samples} spp, {s.backend}): "
+          f"{res.render_seconds:.1f} s; total {res.total_seconds:.1f} s")
+    print(f"wrote {res.png} ({w}x{h}, {res.layout.columns}x{res.layout.rows} tiles), {res.exr}, {res.sidecar}")
+    return EXIT_OK
+
+
+def cmd_batch(ns: argparse.Namespace) -> int:
+    """``batch``: run the jobs of a job file and print a summary table."""
+    from .batch import float_option, int_option, exit_code, load_job_file, run_batch
+    from .outputs import StagedOutputs, format_table, write_json
+
+    n_jobs = int_option("jobs", ns.jobs, 1, 4096)
+    if ns.scheduler is not None and n_jobs > 1:
+        raise ParameterError("jobs", n_jobs, "1 with --scheduler (the cluster's workers set the parallelism)")
+    timeout = float_option("timeout", ns.timeout, 1.0, 1e7) if ns.timeout is not None else None
+    report = Path(ns.report).absolute() if ns.report else None
+    if report is not None and report.suffix.lower() != ".json":
+        raise ParameterError("report", ns.report, "a path ending in .json")
+    jobs = load_job_file(ns.jobfile, output_dir=ns.output_dir or Path("out") / "batch")
+    results = run_batch(jobs, n_jobs=n_jobs, scheduler=ns.scheduler, timeout=timeout, progress=ns.progress)
+    rows = []
+    for r in results:
+        if r.ok:
+            stem = r.outputs[0][: -len(".png")]
+            detail = f"{stem}.{{png,exr,json}}"
+        else:
+            detail = r.error
+        rows.append([r.name, r.status, f"{r.seconds:.1f}", detail])
+    print(format_table(["job", "status", "seconds", "outputs / error"], rows))
+    failed = sum(not r.ok for r in results)
+    print(f"\n{len(results) - failed} of {len(results)} jobs rendered" + (f", {failed} failed" if failed else ""))
+    if report is not None:
+        with StagedOutputs([report]) as staged:
+            write_json(staged.temp(report), {"jobfile": str(Path(ns.jobfile).absolute()),
+                                             "results": [r.to_dict() for r in results]})
+    return exit_code(results)
+
+
+def _hint(e: ParameterError) -> str:
+    if any(s.name == e.name for s in PARAM_SPECS) or e.name in ("sun_strength", "output", "resolution"):
+        return f" (option --{e.name.replace('_', '-')})"
+    return ""
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``python -m layered_brdf_addon`` and ``layered-brdf``; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
+        argv = ["gallery", *argv]
+    parser = build_parser()
+    ns = parser.parse_args(argv)
+    try:
+        if ns.command == "render":
+            return cmd_render(ns, argv)
+        if ns.command == "batch":
+            return cmd_batch(ns)
+        return cmd_gallery(ns, argv)
+    except ParameterError as e:
+        print(f"{PROG}: error: {e}{_hint(e)}", file=sys.stderr)
+        return EXIT_INVALID
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted; no partial output was left", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as e:  # a render that Blender could not do: report it, exit 1
+        import traceback
+
+        traceback.print_exc(file=sys.stderr)
+        print(f"{PROG}: error: {e.__class__.__name__}: {e}", file=sys.stderr)
+        return EXIT_FAILED
+
+
+if __name__ == "__main__":
+    sys.exit(main())
