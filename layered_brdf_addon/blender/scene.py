@@ -70,6 +70,13 @@ def build_scene(spec: SceneSpec, scene=None):
     for k, c in enumerate(spec.centers):
         obj = bpy.data.objects.new(f"Sphere{k}", mesh.copy() if k else mesh)
         obj.location = c
+        # Camera rays only: no sphere shadows, occludes or reflects another (a convex
+        # sphere cannot shadow itself), so every sphere sees the light alone.
+        obj.visible_shadow = False
+        obj.visible_diffuse = False
+        obj.visible_glossy = False
+        obj.visible_transmission = False
+        obj.visible_volume_scatter = False
         scene.collection.objects.link(obj)
         spheres.append(obj)
 

@@ -43,19 +43,21 @@ def brdf_times_cos(params: LayeredParams, n0, n1, d, v, l, wavelengths=WAVELENGT
 
 
 def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1.0, samples: int = 2048,
-                        seed: int = 0, wavelengths=WAVELENGTHS_NM):
+                        seed: int = 0, wavelengths=WAVELENGTHS_NM, shading=None):
     """Pixels (P, 3) under a uniform environment of ``radiance``, by Monte Carlo.
 
     Directions come from a mixture of cosine sampling (1/3) and a Phong lobe about the
     mirror direction (2/3, exponent half the narrower of ``e0`` and ``e1 / r1^2``); the
     estimator divides by the mixture density, so it is unbiased for any parameters.
+    ``shading(params, n0, n1, d, l, v)`` (pixel per unit irradiance from ``l``) replaces
+    the exact model, e.g. ``closures.closure_shading`` for a white-furnace prediction.
     """
     rng = np.random.default_rng(seed)
     n0 = np.asarray(n0, dtype=float)
     P = n0.shape[0]
     v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
     r_v = reflect(-v, n0)
-    k = 0.5 * min(params.e0, params.e1 / max(params.r1) ** 2)
+    k = max(0.5 * min(params.e0, params.e1 / max(params.r1) ** 2), 1.0)
     out = np.zeros((P, 3))
     for _ in range(samples):
         u1, u2, u3 = rng.random(P), rng.random(P), rng.random(P)
@@ -63,7 +65,10 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
         lobe_dir = _phong_dirs(r_v, k, u1, u2)
         l = np.where((u3 < 1.0 / 3.0)[..., None], cos_dir, lobe_dir)
         pdf = _phong_pdf(n0, 1.0, l) / 3.0 + 2.0 / 3.0 * _phong_pdf(r_v, k, l)
-        val = brdf_times_cos(params, n0, n1, d, v, l, wavelengths)
+        if shading is None:
+            val = brdf_times_cos(params, n0, n1, d, v, l, wavelengths)
+        else:
+            val = shading(params, n0, n1, d, l, v)
         out += np.where(pdf[..., None] > 0, val / np.where(pdf > 0, pdf, 1.0)[..., None], 0.0)
     return radiance * out / samples
 
