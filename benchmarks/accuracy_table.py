@@ -201,8 +201,10 @@ def accuracy(sw: dict) -> dict:
     def split(de: np.ndarray) -> dict:
         return dict(all=stats(de), tilt_0=stats(de[~tilted]), tilted=stats(de[tilted]))
 
+    tilted_all = np.tile(sw["tilt"] != 0.0, len(triples))
     result = dict(
         modes={m: dict(specular=stats(cat(spec_de[m]), cat(spec_diff[m])),
+                       specular_tilt_0=stats(cat(spec_de[m])[~tilted_all]),
                        diffuse=stats(cat(diff_de[m]), cat(diff_diff[m])),
                        min_rgb=min_rgb[m]) for m in mode_map},
         closure_levels={k: dict(vs_ground_truth=split(cat(clo_de[k])), vs_rgb_exact=split(cat(clo_de_rgb[k])))
@@ -267,6 +269,25 @@ def cutoffs() -> dict:
                 optical_tol1_wyman=sp.interference_cutoff_optical_nm(1.0, cmf="wyman"))
 
 
+def thick_layers(r1=(1.5, 1.5, 1.5), bands=((1000.0, 2000.0), (2000.0, 3000.0), (3000.0, 4000.0), (4000.0, 6000.0)),
+                 step: float = 2.0) -> dict:
+    """Diffuse ``rho_d`` of thick layers: CIEDE2000 to the ground truth of the spectral modes and
+    of the interference-free mean (``rho_d = 1``, what a planner would use beyond ``d*``)."""
+    gt = sp.ground_truth_sampling()
+    out = {}
+    for lo, hi in bands:
+        d = np.arange(lo, hi, step)
+        ref = diffuse_rgb(gt, r1, d)
+        row = {}
+        for n in (16, 32):
+            de = sp.delta_e_2000(diffuse_rgb(sp.spectral_sampling(n), r1, d), ref)
+            row[f"spectral {n}"] = dict(mean=float(de.mean()), max=float(de.max()))
+        de = sp.delta_e_2000(np.ones_like(ref), ref)
+        row["mean colour"] = dict(mean=float(de.mean()), max=float(de.max()))
+        out[f"{lo:g}-{hi:g}"] = row
+    return dict(r1=list(r1), bands=out)
+
+
 def _fmt(x: float) -> str:
     if not np.isfinite(x):
         return "inf"
@@ -282,17 +303,18 @@ def _fmt(x: float) -> str:
 def markdown(res: dict) -> str:
     acc, tp = res["accuracy"], res["throughput"]
     lines = ["### CIEDE2000 to the 1 nm spectral ground truth", "",
-             "| mode | specular mean | specular p95 | specular max | diffuse mean | diffuse p95 | diffuse max "
-             "| max RGB diff (spec / diff) | specular evals/s | diffuse evals/s |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+             "| mode | specular mean | specular p95 | specular max | specular, tilt 0: mean / p95 | diffuse mean "
+             "| diffuse p95 | diffuse max | max RGB diff (spec / diff) | specular evals/s | diffuse evals/s |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for name, m in acc["modes"].items():
-        s, d = m["specular"], m["diffuse"]
+        s, d, s0 = m["specular"], m["diffuse"], m["specular_tilt_0"]
         t = tp[name]
-        lines.append(f"| {name} | {_fmt(s['mean'])} | {_fmt(s['p95'])} | {_fmt(s['max'])} | {_fmt(d['mean'])} | "
+        lines.append(f"| {name} | {_fmt(s['mean'])} | {_fmt(s['p95'])} | {_fmt(s['max'])} | "
+                     f"{_fmt(s0['mean'])} / {_fmt(s0['p95'])} | {_fmt(d['mean'])} | "
                      f"{_fmt(d['p95'])} | {_fmt(d['max'])} | {s['max_rgb_diff']:.3f} / {d['max_rgb_diff']:.3f} | "
                      f"{t['specular']:.3g} | {t['diffuse']:.3g} |")
     gt = tp["ground truth 1 nm"]
-    lines.append(f"| ground truth 1 nm | 0 | 0 | 0 | 0 | 0 | 0 | 0 | {gt['specular']:.3g} | {gt['diffuse']:.3g} |")
+    lines.append(f"| ground truth 1 nm | 0 | 0 | 0 | 0 | 0 | 0 | 0 | 0 | {gt['specular']:.3g} | {gt['diffuse']:.3g} |")
     lines += ["", "### Closure approximation levels (RGB mode, specular, pixel per unit irradiance)", "",
               "Mean / p95 CIEDE2000; columns: all configurations, tilt 0 only, tilt 10 and 14 only.", "",
               "| level | vs ground truth: all | tilt 0 | tilted | vs RGB exact: all | tilt 0 | tilted | evals/s |",
@@ -323,6 +345,13 @@ def markdown(res: dict) -> str:
         lines.append(f"| {row['r1']:g} | {_fmt(row['d_star_tol0.5'])} | {_fmt(row['d_star_tol1'])} | "
                      f"{_fmt(row['d_star_tol2'])} | {row['diffuse_modulation']:.3f} | "
                      f"{_fmt(row['d_star_diffuse_tol1'])} |")
+    tl = res["thick_layers"]
+    lines += ["", f"### Thick layers, diffuse, r1 = {'/'.join(f'{x:g}' for x in tl['r1'])}: mean / max CIEDE2000 "
+              "to the ground truth", "", "| d (nm) | spectral 16 | spectral 32 | interference dropped (mean colour) |",
+              "| --- | ---: | ---: | ---: |"]
+    for band, row in tl["bands"].items():
+        lines.append(f"| {band} | " + " | ".join(f"{_fmt(row[k]['mean'])} / {_fmt(row[k]['max'])}"
+                                                 for k in ("spectral 16", "spectral 32", "mean colour")) + " |")
     periods = {f"{t:g}": c["rows"][0][f"periods_tol{t:g}"] for t in (0.5, 1.0, 2.0)}
     lines += ["", f"Optical thickness cut-off r1·d* (ΔE 1): {c['optical_tol1']:g} nm "
               f"(with the Wyman CMFs: {c['optical_tol1_wyman']:g} nm); phase spread across 380-780 nm at d*, "
@@ -339,7 +368,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     sw = sweep(args.thickness, args.views)
-    res = dict(accuracy=accuracy(sw), throughput=throughput(args.points), cutoffs=cutoffs())
+    res = dict(accuracy=accuracy(sw), throughput=throughput(args.points), cutoffs=cutoffs(),
+               thick_layers=thick_layers())
     res["white_correction"] = {s.label: s.white_correction.tolist() for s in
                                (sp.ground_truth_sampling(), sp.spectral_sampling(32, "cie1931", "point"),
                                 sp.ground_truth_sampling("wyman"), sp.spectral_sampling(32, "wyman"),
@@ -356,7 +386,8 @@ def main(argv=None) -> int:
     print(markdown(res))
     print(f"\nwhite correction (diag, ground truth / all N with CIE tables): {res['white_correction']}")
     print(f"Wyman CMF vs CIE 1931 table: {res['wyman_table_error']}")
-    print(f"tilted configurations without a transmitted path (mirror used): {res['accuracy']['tilted_mirror_fallback']}")
+    print("tilted configurations without a transmitted path (mirror used): "
+          f"{res['accuracy']['tilted_mirror_fallback']}")
     print(f"lowest RGB value per mode: { {k: round(v['min_rgb'], 4) for k, v in res['accuracy']['modes'].items()} }"
           f"; ground truth {res['accuracy']['ground_truth_min_rgb']:.4f}")
     print(f"wrote {args.out} in {res['setup']['seconds']:.1f} s")

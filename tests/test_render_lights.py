@@ -40,7 +40,7 @@ def _pixels(cam):
 
 
 def test_uniform_environment():
-    S, cam = _scene(samples=512)
+    S, cam = _scene(samples=256)
     S.set_uniform_environment(1.0)
     img = S.render_passes().beauty
     geo, mask, n0, d = _pixels(cam)

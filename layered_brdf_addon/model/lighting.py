@@ -59,17 +59,25 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
     r_v = reflect(-v, n0)
     k = max(0.5 * min(params.e0, params.e1 / max(params.r1) ** 2), 1.0)
     out = np.zeros((P, 3))
-    for _ in range(samples):
-        u1, u2, u3 = rng.random(P), rng.random(P), rng.random(P)
-        cos_dir = _phong_dirs(n0, 1.0, u1, u2)  # cos^1 about n0 = cosine sampling
-        lobe_dir = _phong_dirs(r_v, k, u1, u2)
+    batch = max(1, min(samples, 65536 // max(P, 1)))
+    done = 0
+    while done < samples:
+        b = min(batch, samples - done)
+        rep = lambda a: np.repeat(a[None], b, axis=0).reshape((b * P,) + np.shape(a)[1:])  # noqa: E731
+        N0, RV, V = rep(n0), rep(r_v), rep(np.ascontiguousarray(v))
+        N1, D = rep(np.asarray(n1, dtype=float)), rep(np.broadcast_to(np.asarray(d, dtype=float), (P,)))
+        u1, u2, u3 = rng.random(b * P), rng.random(b * P), rng.random(b * P)
+        cos_dir = _phong_dirs(N0, 1.0, u1, u2)  # cos^1 about n0 = cosine sampling
+        lobe_dir = _phong_dirs(RV, k, u1, u2)
         l = np.where((u3 < 1.0 / 3.0)[..., None], cos_dir, lobe_dir)
-        pdf = _phong_pdf(n0, 1.0, l) / 3.0 + 2.0 / 3.0 * _phong_pdf(r_v, k, l)
+        pdf = _phong_pdf(N0, 1.0, l) / 3.0 + 2.0 / 3.0 * _phong_pdf(RV, k, l)
         if shading is None:
-            val = brdf_times_cos(params, n0, n1, d, v, l, wavelengths)
+            val = brdf_times_cos(params, N0, N1, D, V, l, wavelengths)
         else:
-            val = shading(params, n0, n1, d, l, v)
-        out += np.where(pdf[..., None] > 0, val / np.where(pdf > 0, pdf, 1.0)[..., None], 0.0)
+            val = shading(params, N0, N1, D, l, V)
+        est = np.where(pdf[..., None] > 0, val / np.where(pdf > 0, pdf, 1.0)[..., None], 0.0)
+        out += est.reshape(b, P, 3).sum(axis=0)
+        done += b
     return radiance * out / samples
 
 
