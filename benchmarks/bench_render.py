@@ -1,0 +1,138 @@
+"""What accuracy and effects cost in render time (Cycles CPU, the reference scene).
+
+For each configuration the cost per sample is the difference between renders at two
+sample counts divided by the difference of the counts, so scene set-up, shader
+compilation and BVH building do not count.  All ratios are taken within one run.
+
+Configurations: the layered material with the effect plan of its parameters
+("planned") and with the always-full shader ("full"), each with the node group and
+the OSL shader (Beckmann, and Phong lobes for OSL), against Blender's Principled
+BSDF with Thin Film and a plain Diffuse BSDF on the same scene and samples.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def _scene(backend_osl: bool, size: int):
+    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.model.sphere import Sun
+
+    S.reset_blender()
+    cam = S.camera_for(1, size)
+    sun = Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=3.0)
+    spheres = S.build_scene(S.SceneSpec(camera=cam, sun=sun, osl=backend_osl, threads=1))
+    return S, spheres[0]
+
+
+def _time_render(S, samples: int) -> float:
+    import bpy
+
+    bpy.context.scene.cycles.samples = samples
+    with __import__("tempfile").TemporaryDirectory() as tmp:
+        return S.render_to_exr(Path(tmp) / "r.exr")
+
+
+def per_sample(S, s1: int, s2: int, repeats: int) -> float:
+    _time_render(S, 1)  # warm: kernels, shader compilation
+    best1 = min(_time_render(S, s1) for _ in range(repeats))
+    best2 = min(_time_render(S, s2) for _ in range(repeats))
+    return max(best2 - best1, 1e-9) / (s2 - s1)
+
+
+def principled_thin_film(obj):
+    import bpy
+
+    mat = bpy.data.materials.new("PrincipledThinFilm")
+    nt = mat.node_tree
+    bsdf = nt.nodes.get("Principled BSDF") or nt.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Thin Film Thickness"].default_value = 300.0
+    bsdf.inputs["Thin Film IOR"].default_value = 1.33
+    bsdf.inputs["Roughness"].default_value = 0.2
+    out = nt.nodes.get("Material Output") or nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    obj.data.materials.append(mat)
+
+
+def plain_diffuse(obj):
+    import bpy
+
+    mat = bpy.data.materials.new("Diffuse")
+    nt = mat.node_tree
+    nt.nodes.clear()
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(d.outputs[0], out.inputs["Surface"])
+    obj.data.materials.append(mat)
+
+
+def run(presets, size, s1, s2, repeats):
+    from layered_brdf_addon.blender.material import apply_layered_material
+    from layered_brdf_addon.model import preset
+    from layered_brdf_addon.model.plan import EffectPlan, plan_effects
+
+    rows = []
+    S, obj = _scene(False, size)
+    principled_thin_film(obj)
+    ref = per_sample(S, s1, s2, repeats)
+    rows.append(dict(config="Principled BSDF + Thin Film", backend="nodes", per_sample=ref))
+    S, obj = _scene(False, size)
+    plain_diffuse(obj)
+    rows.append(dict(config="Diffuse BSDF", backend="nodes", per_sample=per_sample(S, s1, s2, repeats)))
+    for name in presets:
+        p = preset(name)
+        planned = plan_effects(p)
+        for backend, lobe in (("nodes", "beckmann"), ("osl", "beckmann"), ("osl", "phong")):
+            q = p.replace(lobe=lobe)
+            for which, plan in (("planned", planned), ("full", EffectPlan.full(lobe=lobe))):
+                plan = EffectPlan(**{**plan.to_dict(), "lobe": lobe})
+                S, obj = _scene(backend == "osl", size)
+                apply_layered_material(obj, q, backend, plan=plan)
+                t = per_sample(S, s1, s2, repeats)
+                rows.append(dict(config=f"{name} {which} [{plan.key}]", preset=name, which=which, backend=backend,
+                                 lobe=lobe, plan=plan.key, per_sample=t))
+    for r in rows:
+        r["vs_principled"] = r["per_sample"] / ref
+    return rows
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--presets", nargs="*", default=["fig3_clay", "fig4_parallel", "fig6_medium", "soap_bubble",
+                                                      "glazed_clay", "beetle_shell"])
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--samples", type=int, nargs=2, default=(4, 36))
+    ap.add_argument("--repeats", type=int, default=2)
+    args = ap.parse_args(argv)
+    t0 = time.time()
+    rows = run(args.presets, args.size, args.samples[0], args.samples[1], args.repeats)
+    RESULTS.mkdir(exist_ok=True)
+    out = RESULTS / "render_cost.json"
+    tmp = out.with_suffix(".partial")
+    tmp.write_text(json.dumps(dict(size=args.size, samples=args.samples, threads=1, rows=rows), indent=1))
+    os.replace(tmp, out)
+    by = {(r.get("preset"), r.get("backend"), r.get("lobe"), r.get("which")): r for r in rows}
+    print(f"{args.size}x{args.size} sphere, 1 thread, cost per sample from {args.samples[0]} and "
+          f"{args.samples[1]} samples, best of {args.repeats}; {time.time() - t0:.0f} s in all")
+    print("| configuration | backend | ms/sample | vs Principled+Thin Film | saving of planning |")
+    print("|---|---|---|---|---|")
+    for r in rows:
+        saving = ""
+        if r.get("which") == "planned":
+            full = by[(r["preset"], r["backend"], r["lobe"], "full")]
+            saving = f"{1.0 - r['per_sample'] / full['per_sample']:+.0%}"
+        lobe = f" {r['lobe']}" if r.get("lobe") else ""
+        print(f"| {r['config']} | {r['backend']}{lobe} | {1000 * r['per_sample']:.2f} | "
+              f"{r['vs_principled']:.2f}x | {saving} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,85 @@
+"""Effect planning: the decision per preset, and that dropping an inactive effect changes
+no pixel while dropping an active one does."""
+import numpy as np
+import pytest
+
+from layered_brdf_addon.model import PRESETS, preset
+from layered_brdf_addon.model.plan import EffectPlan, plan_effects
+
+from render_helpers import render_row
+
+EXPECTED = {
+    # name: (specular, diffuse, thickness, normals, dispersion)
+    "fig3_old_metal": (False, True, "noise", "parallel", False),
+    "fig3_thin_film": (False, True, "noise", "parallel", False),
+    "fig3_clay": (False, True, "noise", "parallel", False),
+    "fig4_parallel": (True, True, "noise", "parallel", True),
+    "fig4_tilted": (True, True, "noise", "tilted", True),
+    "fig5_correlated": (True, False, "noise", "correlated", True),
+    "fig6_thin": (True, True, "noise", "tilted", True),
+    "fig6_medium": (True, True, "noise", "tilted", True),
+    "fig6_thick": (True, True, "noise", "tilted", True),
+    "soap_bubble": (True, False, "height", "parallel", False),
+    "oil_slick": (True, True, "noise", "parallel", True),
+    "beetle_shell": (True, True, "noise", "tilted", True),
+    "anodised_titanium": (True, True, "noise", "parallel", True),
+    "old_metal": (True, True, "noise", "parallel", False),
+    "glazed_clay": (True, True, "noise", "parallel", False),
+}
+
+
+def test_every_preset_has_an_asserted_plan():
+    assert set(EXPECTED) == set(PRESETS)
+
+
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_planner_decision(name):
+    plan = plan_effects(preset(name))
+    assert (plan.specular, plan.diffuse, plan.thickness, plan.normals, plan.dispersion) == EXPECTED[name]
+
+
+def test_planner_rules():
+    p = preset("fig4_tilted")
+    assert plan_effects(p.replace(tilt=0.0)).normals == "parallel"
+    assert plan_effects(p.replace(d_min=70.0, d_max=70.0)).thickness == "constant"
+    assert plan_effects(p.replace(normal_mode="correlated", d_min=70.0, d_max=70.0)).normals == "parallel"
+    assert plan_effects(p.replace(normal_mode="correlated", bump_strength=0.0)).normals == "parallel"
+    assert not plan_effects(p.replace(ks=0.0)).specular
+    assert not plan_effects(p.replace(kd=0.0)).diffuse
+    assert not plan_effects(p.replace(r1_r=1.5, r1_g=1.5, r1_b=1.5)).dispersion
+
+
+# Pairs rendered with the planned shader and with a shader that also carries an effect
+# the parameters make invisible; and one pair where an active effect is dropped.
+EQUAL = preset("fig4_tilted").replace(r1_r=1.5, r1_g=1.5, r1_b=1.5, thickness_mode="height", d_min=0.0,
+                                      d_max=500.0)
+FLAT = preset("fig4_tilted").replace(tilt=0.0, d_min=120.0, d_max=120.0)
+DISPERSIVE = preset("fig6_medium").replace(thickness_mode="height")
+
+
+@pytest.fixture(scope="module", params=["nodes", "osl"])
+def pairs(request):
+    full = EffectPlan.full(thickness="noise", normals="tilted")
+    cases = [
+        (EQUAL, plan_effects(EQUAL)),
+        (EQUAL, EffectPlan(**{**plan_effects(EQUAL).to_dict(), "dispersion": True})),
+        (FLAT, plan_effects(FLAT)),
+        (FLAT, full),
+        (DISPERSIVE, plan_effects(DISPERSIVE)),
+        (DISPERSIVE, EffectPlan(**{**plan_effects(DISPERSIVE).to_dict(), "dispersion": False})),
+    ]
+    row = render_row([c[0] for c in cases], backend=request.param, plans=[c[1] for c in cases], height=48)
+    w = row.camera.height
+    tiles = [row.passes.beauty[:, k * w:(k + 1) * w] for k in range(len(cases))]
+    return tiles
+
+
+def test_inactive_effects_change_no_pixel(pairs):
+    for a, b in ((0, 1), (2, 3)):
+        scale = max(pairs[a].max(), 1e-6)
+        assert np.max(np.abs(pairs[a] - pairs[b])) <= 1e-4 * scale, (a, b)
+
+
+def test_dropping_an_active_effect_changes_the_image(pairs):
+    diff = np.abs(pairs[4] - pairs[5])
+    assert diff.max() > 0.05 * pairs[4].max()
