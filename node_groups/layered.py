@@ -79,6 +79,11 @@ def _interface(group):
     s = iface.new_socket("Normal", in_out="INPUT", socket_type="NodeSocketVector")
     s.hide_value = True
     s.description = "Upper-boundary normal; the shading normal when not connected"
+    s = iface.new_socket("Base Color", in_out="INPUT", socket_type="NodeSocketColor")
+    s.default_value = (1.0, 1.0, 1.0, 1.0)
+    s.description = "Multiplies the diffuse base colour (plug a texture here)"
+    s = iface.new_socket("Base Shader", in_out="INPUT", socket_type="NodeSocketShader")
+    s.description = "The artist's own material under the layer; it receives the transmitted 1 - F"
     iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
     s = iface.new_socket("Thickness", in_out="OUTPUT", socket_type="NodeSocketFloat")
     s.description = "Layer thickness d in nm"
@@ -161,8 +166,10 @@ def build_into(group, plan) -> None:
     else:
         n1 = n0
 
+    sep, dd = ops.node("ShaderNodeSeparateColor", {"Color": Expr(ops, gin.outputs["Base Color"], "vector", 0)})
+    tint = [ops.maximum(ops.out(sep, dd, k, "float"), 0.0) for k in range(3)]
     inputs = dict(r1=(P["r1_r"], P["r1_g"], P["r1_b"]), r0=P["r0"], e0=P["e0"], e1=P["e1"], ks=P["ks"],
-                  kd=P["kd"], base=(P["base_r"], P["base_g"], P["base_b"]))
+                  kd=P["kd"], base=tuple(P[f"base_{c}"] * t for c, t in zip("rgb", tint)))
     res = program.shade(ops, inputs, n0, n1, d, v, plan)
 
     shaders = []
@@ -180,6 +187,13 @@ def build_into(group, plan) -> None:
                                                      "Normal": cl.normal}, distribution="BECKMANN")
         bsdf.label = cl.name
         shaders.append(ops.out(bsdf, dd, 0, "shader"))
+    # The artist's base shader gets the transmitted 1 - F(v) (mean over the channels:
+    # a Mix Shader takes one factor).
+    cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
+    f_mean = sum(program.schlick(ops, cos_v, program.fresnel_f0(r1, P["r0"])) for r1 in inputs["r1"]) * (1.0 / 3.0)
+    mix, dd = ops.node("ShaderNodeMixShader", {"Fac": 1.0 - f_mean})
+    group.links.new(gin.outputs["Base Shader"], mix.inputs[2])
+    shaders.append(ops.out(mix, dd, 0, "shader"))
     total = None
     for s in shaders:
         if total is None:

@@ -15,7 +15,7 @@ pytestmark = pytest.mark.slow
 
 NAMES = sorted(PRESETS)
 # Furnace tests need numpy to know d: noise patterns are replaced by the height pattern.
-PARAMS = [preset(n).replace(thickness_mode="height") for n in NAMES]
+PARAMS = [preset(n).replace(thickness_mode="height", base_layer="none") for n in NAMES]
 
 
 @pytest.fixture(scope="module")

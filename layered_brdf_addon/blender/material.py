@@ -83,6 +83,11 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan):
         osl_backend.compile_script_node(node)
         shader_out, d_out, n1_out = node.outputs["BSDF"], node.outputs["Thickness"], node.outputs["LowerNormal"]
         n0_out = node.outputs.get("UpperNormal")
+    base_in = node.inputs.get("Base Shader") or node.inputs.get("Base")
+    if params.base_layer == "transparent" and base_in is not None:
+        tr = tree.nodes.new("ShaderNodeBsdfTransparent")
+        tr.location = (-300, -300)
+        tree.links.new(tr.outputs[0], base_in)
     node.name = node.label = SHADER_NODE
     node.width = 220
     tree.links.new(shader_out, out.inputs["Surface"])
@@ -122,14 +127,14 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
         plan = EffectPlan(**{**plan.to_dict(), "lobe": params.lobe})
     mat = _material_for(target, name)
     node = shader_node(mat)
-    key = f"{backend}:{plan.key}"
+    key = f"{backend}:{plan.key}:{params.base_layer}"
     if node is None or mat.get("layered_brdf_build") != key or not _node_current(node, backend, plan):
         node = _build_tree(mat, params, backend, plan)
         mat["layered_brdf_build"] = key
     set_inputs(node, params)
     mat["layered_brdf_backend"] = backend
     mat["layered_brdf_enums"] = {"thickness_mode": params.thickness_mode, "normal_mode": params.normal_mode,
-                                 "lobe": params.lobe}
+                                 "lobe": params.lobe, "base_layer": params.base_layer}
     return mat
 
 

@@ -95,6 +95,7 @@ def _p(default, label, description, *, unit="", range=(-math.inf, math.inf), sof
 THICKNESS_MODES = ("noise", "height")
 NORMAL_MODES = ("parallel", "tilted", "correlated")
 LOBES = ("beckmann", "phong")
+BASE_LAYERS = ("none", "transparent")
 
 
 @dataclass
@@ -153,6 +154,9 @@ class LayeredParams:
     base_r: float = _p(0.8, "Base R", "Diffuse base colour, red", range=(0.0, 1.0), group="Diffuse")
     base_g: float = _p(0.8, "Base G", "Diffuse base colour, green", range=(0.0, 1.0), group="Diffuse")
     base_b: float = _p(0.8, "Base B", "Diffuse base colour, blue", range=(0.0, 1.0), group="Diffuse")
+    base_layer: str = _p("none", "Base shader",
+                         "What lies under the layer besides the diffuse part: 'none' (leave the Base Shader "
+                         "input to the artist) or 'transparent' (a soap film)", options=BASE_LAYERS, group="Diffuse")
     lobe: str = _p("beckmann", "Lobe",
                    "Closure used for the specular lobes: 'beckmann' (both backends) or 'phong' (OSL only)",
                    options=LOBES, group="Accuracy")

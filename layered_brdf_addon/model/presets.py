@@ -33,7 +33,8 @@ PAPER_PRESETS: dict[str, dict] = {
 
 ARTIST_PRESETS: dict[str, dict] = {
     "soap_bubble": dict(r1_r=1.33, r1_g=1.33, r1_b=1.33, d_min=150.0, d_max=900.0, thickness_mode="height",
-                        e0=800.0, e1=800.0, ks=1.0, kd=0.0, base_r=0.0, base_g=0.0, base_b=0.0),
+                        e0=800.0, e1=800.0, ks=1.0, kd=0.0, base_r=0.0, base_g=0.0, base_b=0.0,
+                        base_layer="transparent"),
     "oil_slick": dict(r1_r=1.45, r1_g=1.47, r1_b=1.5, d_min=150.0, d_max=600.0, noise_scale=2.5,
                       noise_detail=4.0, e0=400.0, e1=400.0, ks=1.0, kd=0.6,
                       base_r=0.02, base_g=0.02, base_b=0.025),
