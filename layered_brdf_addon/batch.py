@@ -32,6 +32,7 @@ BACKENDS = ("nodes", "osl")
 PARAM_NAMES = tuple(s.name for s in PARAM_SPECS)
 RUN_OPTIONS = ("name", "preset", "params", "blend", "object", "backend", "samples", "resolution", "sun",
                "sun_strength", "seed", "threads", "output")
+REFERENCE_ONLY = ("sun", "sun_strength")  # options of the reference scene only
 REFERENCE_SAMPLES = 1
 REFERENCE_RESOLUTION = 128
 REFERENCE_THREADS = 2
@@ -288,7 +289,7 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
         obj = opts.get("object")
         if not isinstance(obj, str) or not obj:
             raise ParameterError("object", obj, "the name of the object in the .blend that gets the material")
-        for key in ("sun", "sun_strength"):
+        for key in REFERENCE_ONLY:
             if key in opts:
                 raise ParameterError(key, opts[key], "no value with a .blend (the file's own lights are used)")
     elif "object" in opts:
@@ -401,14 +402,59 @@ def _blend_lights(scene) -> list[dict[str, Any]]:
     return out
 
 
-def _osl_aov_layers(scene) -> dict[str, dict[str, Any]]:
-    """The AOVs of an OSL render (Cycles writes none under OSL), from emission renders."""
+def render_exr(path: Path, scene, guard) -> float:
+    """Render ``scene``'s camera and save every pass to the multilayer float EXR ``path``.
+
+    The same file as :func:`layered_brdf_addon.blender.scene.render_to_exr`, written
+    after the render under the guard's I/O lock, so an interrupt during the render
+    stops it at once and one during the write waits for the file to be complete.
+    Returns the render seconds.
+    """
+    import bpy
+
+    s = scene.render.image_settings
+    s.media_type = "MULTI_LAYER_IMAGE"
+    s.file_format = "OPEN_EXR_MULTILAYER"
+    s.color_depth = "32"
+    s.exr_codec = "ZIP"
+    t0 = time.perf_counter()
+    bpy.ops.render.render(write_still=False, scene=scene.name)
+    seconds = time.perf_counter() - t0
+    guard.check()
+    result = bpy.data.images.get("Render Result")
+    if result is None:
+        raise RuntimeError("Blender produced no render result")
+    with guard.io():
+        result.save_render(filepath=str(path), scene=scene)
+    if not Path(path).exists():
+        raise RuntimeError(f"Blender did not write {path}")
+    return seconds
+
+
+def _osl_aov_layers(scene, guard) -> dict[str, dict[str, Any]]:
+    """The AOVs of an OSL render (Cycles writes none under OSL), from emission renders.
+
+    Their temporary files go to a private folder that an interrupt removes.
+    """
+    import shutil
+    import tempfile
+
     import numpy as np
 
     from .blender import scene as S
     from .blender.material import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL
 
-    p = S.render_passes_osl(scene)
+    private = tempfile.mkdtemp(prefix="layered_brdf_aov_")
+    cleanup = lambda: shutil.rmtree(private, ignore_errors=True)  # noqa: E731
+    guard.add_cleanup(cleanup)
+    saved = tempfile.tempdir
+    tempfile.tempdir = private
+    try:
+        p = S.render_passes_osl(scene)
+    finally:
+        tempfile.tempdir = saved
+        cleanup()
+        guard.remove_cleanup(cleanup)
     one = np.ones(p.thickness.shape)
     return {AOV_THICKNESS: {"X": p.thickness},
             AOV_LOWER_NORMAL: {"R": p.lower_normal[..., 0], "G": p.lower_normal[..., 1],
@@ -422,8 +468,8 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
     """Render ``req`` in this process; write ``STEM.exr``, ``STEM.png`` and ``STEM.json``.
 
     The three files appear together (written under temporary names, renamed when all
-    are complete); SIGINT and SIGTERM stop the render at the next step and leave no
-    file behind.  Returns the sidecar.
+    are complete); SIGINT and SIGTERM stop the render at once and leave no file
+    behind (exit code 130).  Returns the sidecar.
     """
     from .outputs import InterruptGuard, StagedOutputs, exr_beauty, replace_exr_layers, write_json, write_png
 
@@ -454,17 +500,20 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
         apply_layered_material(target, req.params, req.backend)
         guard.check()
         paths = req.paths
-        with StagedOutputs(paths.all()) as staged:
+        with StagedOutputs(paths.all(), guard) as staged:
             exr_tmp = staged.temp(paths.exr)
             t_render = time.perf_counter()
-            S.render_to_exr(exr_tmp, scene)
-            guard.check()
+            render_exr(exr_tmp, scene, guard)
             if req.backend == "osl":
-                replace_exr_layers(exr_tmp, _osl_aov_layers(scene))
+                layers = _osl_aov_layers(scene, guard)
                 guard.check()
+                with guard.io():
+                    replace_exr_layers(exr_tmp, layers)
             render_seconds = time.perf_counter() - t_render
+            guard.check()
             rgb, alpha = exr_beauty(exr_tmp)
-            write_png(staged.temp(paths.png), rgb, alpha if scene.render.film_transparent else None)
+            with guard.io():
+                write_png(staged.temp(paths.png), rgb, alpha if scene.render.film_transparent else None)
             guard.check()
             plan = plan_effects(req.params)
             sidecar = {
@@ -491,7 +540,8 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
                 "host": socket.gethostname(), "python": platform.python_version(),
                 "command": list(command) if command is not None else None,
             }
-            write_json(staged.temp(paths.json), sidecar)
+            with guard.io():
+                write_json(staged.temp(paths.json), sidecar)
             guard.check()
         if log:
             log(f"wrote {paths.png}, {paths.exr}, {paths.json} (render {render_seconds:.2f} s)")
@@ -517,7 +567,8 @@ def load_job_file(path: str | os.PathLike, output_dir: str | os.PathLike | None 
     """Jobs of a TOML or JSON job file.
 
     TOML: an optional ``[defaults]`` table and ``[[job]]`` tables.  JSON: a list of
-    jobs, or ``{"defaults": {...}, "jobs": [...]}``.  Every job has the options of
+    jobs, or ``{"defaults": {...}, "jobs": [...]}``.  Defaults for the reference
+    scene's sun do not apply to jobs that render a .blend.  Every job has the options of
     ``render`` (``d_min = 80``, ``sun = [1, -1, 1]``, ...) and an optional ``name``.
     A file that cannot be read or has no list of jobs raises :class:`ParameterError`;
     a job with invalid options is returned with its ``error`` set (it fails alone).
@@ -553,7 +604,11 @@ def load_job_file(path: str | os.PathLike, output_dir: str | os.PathLike | None 
     for k, entry in enumerate(data):
         if not isinstance(entry, dict):
             raise ParameterError(f"job[{k}]", entry, "a table of render options")
-        options = {**defaults, **entry}
+        inherited = dict(defaults)
+        if "blend" in entry or "blend" in defaults:
+            for key in REFERENCE_ONLY:  # a .blend uses its own lights
+                inherited.pop(key, None)
+        options = {**inherited, **entry}
         explicit = options.get("name")
         base = explicit if isinstance(explicit, str) and explicit else (
             options.get("preset") if isinstance(options.get("preset"), str) else f"job{k + 1}")
@@ -714,25 +769,31 @@ def run_batch(jobs: Sequence[Job], *, n_jobs: int = 1, scheduler: str | None = N
     Results are in job order.
     """
     results: dict[int, JobResult] = {}
+    runnable = [j for j in jobs if j.request is not None]
+    use_dask = runnable and (scheduler is not None or n_jobs > 1)
+    client, cluster = _connect(scheduler, n_jobs) if use_dask else (None, None)
     bar = _progress(len(jobs), progress)
     try:
         for job in jobs:
             if job.request is None:
                 results[job.index] = JobResult(job.name, "invalid", error=job.error or "invalid options")
                 bar.update(1)
-        runnable = [j for j in jobs if j.request is not None]
-        if scheduler is None and n_jobs <= 1:
+        if use_dask:
+            for job, res in _run_on_dask(runnable, client, timeout=timeout):
+                results[job.index] = res
+                bar.set_postfix_str(job.name)
+                bar.update(1)
+        else:
             for job in runnable:
                 bar.set_postfix_str(job.name)
                 results[job.index] = run_job(job.name, job.request.to_argv(), str(job.request.output), timeout)
                 bar.update(1)
-        elif runnable:
-            for job, res in _run_on_dask(runnable, n_jobs=n_jobs, scheduler=scheduler, timeout=timeout):
-                results[job.index] = res
-                bar.set_postfix_str(job.name)
-                bar.update(1)
     finally:
         bar.close()
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
     return [results[j.index] for j in jobs]
 
 
@@ -741,18 +802,24 @@ def _connect(scheduler: str | None, n_jobs: int):
 
     if scheduler is not None:
         try:
-            return Client(scheduler, timeout="20s"), None
+            return Client(scheduler, timeout="10s"), None
         except (OSError, TimeoutError, ValueError) as e:
             raise ParameterError("scheduler", scheduler, "the address of a running Dask scheduler, e.g. "
                                  f"tcp://host:8786 ({e.__class__.__name__}: {e})") from None
-    cluster = LocalCluster(n_workers=n_jobs, threads_per_worker=1, processes=True, dashboard_address=None)
+    import logging
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*[Pp]ort .* already in use.*")
+        cluster = LocalCluster(n_workers=n_jobs, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR)
     return Client(cluster), cluster
 
 
-def _run_on_dask(jobs: Sequence[Job], *, n_jobs: int, scheduler: str | None, timeout: float | None):
+def _run_on_dask(jobs: Sequence[Job], client, *, timeout: float | None):
+    """Submit every job as a Dask task; yield ``(job, result)`` as they complete."""
     from dask.distributed import as_completed
 
-    client, cluster = _connect(scheduler, n_jobs)
     token = uuid.uuid4().hex[:8]
     futures = {}
     try:
@@ -773,10 +840,6 @@ def _run_on_dask(jobs: Sequence[Job], *, n_jobs: int, scheduler: str | None, tim
         for job in jobs:
             remove_stale_temps(job.request.output)
         raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 def exit_code(results: Iterable[JobResult]) -> int:

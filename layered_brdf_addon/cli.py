@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import sys
 from pathlib import Path
 from typing import Any, Iterator, Sequence
@@ -110,6 +109,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--output", default=None, metavar="PATH", help="the contact sheet (default out/gallery.png)")
     g.add_argument("--size", default=None, metavar="PX", help="pixels per tile (default 128)")
     g.add_argument("--columns", default=None, metavar="N", help="tiles per row (default: a square grid)")
+    g.add_argument("--presets", nargs="+", default=None, metavar="NAME",
+                   help="other presets to show instead of the paper's (any of: "
+                   + ", ".join(list(PAPER_PRESETS) + list(ARTIST_PRESETS)) + ")")
     _add_scene_options(g, "samples per pixel (default 16; one is exact under the sun, more anti-alias)")
 
     r = sub.add_parser("render", help="one material on the reference sphere or on an object of a .blend",
@@ -202,7 +204,7 @@ def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     from .outputs import format_table
 
     s = settings_from_options(_options(ns, ("output", "size", "samples", "backend", "columns", "sun",
-                                            "sun_strength", "seed", "threads")))
+                                            "sun_strength", "seed", "threads", "presets")))
     with blender_output(ns.verbose):
         res = render_gallery(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv])
     headers, rows = summary_rows(res)
@@ -252,11 +254,17 @@ def _hint(e: ParameterError) -> str:
     return ""
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``python -m layered_brdf_addon`` and ``layered-brdf``; returns the exit code."""
-    argv = list(sys.argv[1:] if argv is None else argv)
+def normalise_argv(argv: Sequence[str]) -> list[str]:
+    """``gallery`` is the command when none is given (options alone go to the gallery)."""
+    argv = list(argv)
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
         argv = ["gallery", *argv]
+    return argv
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``python -m layered_brdf_addon`` and ``layered-brdf``; returns the exit code."""
+    argv = normalise_argv(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
     ns = parser.parse_args(argv)
     try:

@@ -204,6 +204,8 @@ def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     seed = int_option("seed", o.get("seed", 0), 0, 2**31 - 1)
     threads = int_option("threads", o.get("threads", 2), 1, 1024)
     names = tuple(o.get("presets") or PAPER_PRESETS)
+    if not names or len(set(names)) != len(names):
+        raise ParameterError("presets", list(names), "distinct preset names")
     for name in names:
         params = preset(name)
         if backend == "nodes" and params.lobe != "beckmann":
@@ -235,7 +237,8 @@ class GalleryResult:
 
 
 def title_for(s: GallerySettings) -> str:
-    return f"Granier & Heidrich 2003, Figs. 3\u20136 \u00b7 {s.backend} \u00b7 {s.samples} spp"
+    what = "Granier & Heidrich 2003, Figs. 3\u20136" if s.presets == tuple(PAPER_PRESETS) else "layered-brdf presets"
+    return f"{what} \u00b7 {s.backend} \u00b7 {s.samples} spp"
 
 
 def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
@@ -251,6 +254,7 @@ def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
         from . import __version__
         from .blender import scene as S
         from .blender.material import apply_layered_material
+        from .batch import render_exr
 
         params = [preset(n) for n in s.presets]
         labels = [label_lines(n, p) for n, p in zip(s.presets, params)]
@@ -270,12 +274,13 @@ def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
             apply_layered_material(obj, p, s.backend, name=name)
         guard.check()
         paths = OutputPaths(output_stem(s.output))
-        with StagedOutputs(paths.all()) as staged:
-            render_seconds = S.render_to_exr(staged.temp(paths.exr), scene)
+        with StagedOutputs(paths.all(), guard) as staged:
+            render_seconds = render_exr(staged.temp(paths.exr), scene, guard)
             guard.check()
             rgb, _ = exr_beauty(staged.temp(paths.exr))
             sheet = compose_sheet(to_srgb8(rgb), layout, labels, title)
-            sheet.save(str(staged.temp(paths.png)), format="PNG")
+            with guard.io():
+                sheet.save(str(staged.temp(paths.png)), format="PNG")
             tiles = [GalleryTile(n, p, lab, layout.tile_box(k), centers[k])
                      for k, (n, p, lab) in enumerate(zip(s.presets, params, labels))]
             meta = {
@@ -295,7 +300,8 @@ def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
                 "bpy_version": bpy.app.version_string, "layered_brdf_version": __version__,
                 "host": socket.gethostname(), "command": list(command) if command is not None else None,
             }
-            write_json(staged.temp(paths.json), meta)
+            with guard.io():
+                write_json(staged.temp(paths.json), meta)
             guard.check()
         total = time.perf_counter() - t_start
         if log:

@@ -237,6 +237,13 @@ class NodeOps:
     def cross(self, a, b):
         return self.vmath("CROSS_PRODUCT", a, b)
 
+    def combine(self, x, y, z):
+        """A vector from three scalars (Combine XYZ)."""
+        if all(isinstance(a, Number) for a in (x, y, z)):
+            return (float(x), float(y), float(z))
+        n, d = self.node("ShaderNodeCombineXYZ", {"X": x, "Y": y, "Z": z})
+        return self.out(n, d, 0, "vector")
+
     def normalize(self, v, fallback):
         """Unit ``v``; ``fallback`` where ``|v|^2 <= 1e-20`` (and where it is NaN: comparisons fail)."""
         ok = self.gt(self.dot(v, v), 1e-20)

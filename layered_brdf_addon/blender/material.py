@@ -120,6 +120,9 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     params = (params or LayeredParams()).validate()
     if backend not in BACKENDS:
         raise ParameterError("backend", backend, "one of 'nodes', 'osl'")
+    if backend == "osl" and params.accuracy != "rgb":
+        raise ParameterError("accuracy", params.accuracy, "'rgb' with the OSL backend (spectral modes run in the "
+                             "node group)")
     if backend == "nodes" and params.lobe != "beckmann":
         raise ParameterError("lobe", params.lobe, "'beckmann' with the node backend (phong_ramp exists only in OSL)")
     plan = plan or plan_effects(params)

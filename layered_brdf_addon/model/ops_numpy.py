@@ -93,10 +93,10 @@ class _Vec(np.ndarray):
     def _operand(self, other):
         if isinstance(other, _Vec):
             return other.view(np.ndarray)
+        if isinstance(other, (tuple, list)):
+            return np.asarray(other, dtype=float)  # a constant vector
         other = np.asarray(other, dtype=float)
-        if other.ndim and other.ndim == self.ndim - 1:
-            return other[..., None]
-        return other
+        return other[..., None] if other.ndim else other  # a per-point scalar
 
     def __mul__(self, other):
         return vec(self._base() * self._operand(other))
@@ -128,4 +128,11 @@ def vec(a):
 
 def call(name, fn, inputs, **static):
     """Run a sub-program (a node backend turns it into a sub-group)."""
-    return fn(__import__(__name__, fromlist=["_"]), **inputs, **static)
+    args = {k: vec(v) if isinstance(v, tuple) and len(v) == 3 else v for k, v in inputs.items()}
+    return fn(__import__(__name__, fromlist=["_"]), **args, **static)
+
+
+def combine(x, y, z):
+    """A vector from three scalars."""
+    x, y, z = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float), np.asarray(z, dtype=float))
+    return vec(np.stack([x, y, z], axis=-1))

@@ -18,10 +18,12 @@ class EffectPlan:
     normals: str = "parallel"  # "parallel", "tilted" or "correlated"
     dispersion: bool = True  # one transmitted and one interference lobe per channel (else shared)
     lobe: str = "beckmann"
+    spectral: int = 0  # 0: the paper's RGB; N: N wavelengths
 
     @classmethod
-    def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated") -> "EffectPlan":
-        return cls(True, True, thickness, normals, True, lobe)
+    def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
+             spectral: int = 0) -> "EffectPlan":
+        return cls(True, True, thickness, normals, True, lobe, spectral)
 
     @property
     def key(self) -> str:
@@ -43,6 +45,8 @@ class EffectPlan:
                     "constant": "constant thickness (no pattern evaluated)"}[self.thickness])
         out.append({"parallel": "parallel boundaries", "tilted": "constant tilt of the lower normal",
                     "correlated": "lower normal from the thickness gradient (3 extra pattern evaluations)"}[self.normals])
+        if self.spectral:
+            out.append(f"{self.spectral} wavelengths, summed into RGB lobes")
         if self.specular:
             out.append("per-channel transmitted and interference lobes (dispersion)" if self.dispersion
                        else "one shared transmitted and one shared interference lobe (equal indices)")
@@ -59,5 +63,6 @@ def plan_effects(p: LayeredParams) -> EffectPlan:
     if normals == "correlated" and (not varying or p.bump_strength == 0.0):
         normals = "parallel"  # a constant thickness has no gradient: n1 = n0
     dispersion = not (p.r1_r == p.r1_g == p.r1_b)
+    spectral = 0 if p.accuracy == "rgb" else int(p.accuracy[len("spectral"):])
     return EffectPlan(specular=p.ks > 0.0, diffuse=p.kd > 0.0, thickness=thickness, normals=normals,
-                      dispersion=dispersion, lobe=p.lobe)
+                      dispersion=dispersion, lobe=p.lobe, spectral=spectral)

@@ -218,6 +218,98 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann"):
     return out
 
 
+def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc_I2,
+                  lead_T0, lead_T1, lead_T2, lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI,
+                  r1, lam, m, in0, in1, in2, is0, is1, is2, e0, e1, ks, kd, r0, n0, n1, v, d,
+                  lobe="beckmann", diffuse=True):
+    """One wavelength of the spectral mode, chained: it takes the running sums and returns
+    them updated, so a shader holds only the sums, whatever the number of wavelengths.
+
+    ``m``: the wavelength's row of the spectrum-to-Rec.709 matrix (a vector); ``in_g``: 1
+    if the wavelength belongs to lobe group ``g``; ``is_g``: 1 if it leads group ``g``
+    (its centre and exponent are the group's).  The lead exponents and alphas of the three
+    groups travel packed in vectors.
+    """
+    out = {}
+    # max(d, d - |acc|) is d, but a shader compiler cannot see it: this step then waits for
+    # the previous one, and only the sums, not every wavelength's temporaries, stay alive
+    # (Cycles' SVM has a stack of 255 floats per shader).
+    d = ops.maximum(d, d - ops.length(acc_R))
+    if diffuse:
+        td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
+        rho = ops.maximum(1.0 + ops.cos((4.0 * math.pi / lam) * r1 * d) * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
+        out["acc_D"] = acc_D + m * rho
+    else:
+        out["acc_D"] = acc_D
+    b = channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe)
+    out["acc_R"] = acc_R + m * b["AR"]
+    for tag, accs, leads, e_lead, a_lead in (("T", (acc_T0, acc_T1, acc_T2), (lead_T0, lead_T1, lead_T2),
+                                             lead_eT, lead_aT),
+                                            ("I", (acc_I0, acc_I1, acc_I2), (lead_I0, lead_I1, lead_I2),
+                                             lead_eI, lead_aI)):
+        w = b[f"w_{tag}"]
+        e_parts, a_parts = [], []
+        for g, (acc, lead, member, is_lead) in enumerate(zip(accs, leads, (in0, in1, in2), (is0, is1, is2))):
+            out[f"acc_{tag}{g}"] = acc + m * (w * member)
+            out[f"lead_{tag}{g}"] = ops.select_vec(is_lead, b[f"N_{tag}"], lead)
+            e_parts.append(ops.select(is_lead, b[f"e_{tag}"], ops.dot(e_lead, _UNIT[g])))
+            a_parts.append(ops.select(is_lead, b[f"alpha_{tag}"], ops.dot(a_lead, _UNIT[g])))
+        out[f"lead_e{tag}"] = ops.combine(*e_parts)
+        out[f"lead_a{tag}"] = ops.combine(*a_parts)
+    return out
+
+
+_UNIT = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+
+
+def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
+    """Spectral mode: the channel program at N wavelengths (``r1(lambda)`` from the Cauchy
+    fit through the three indices, a linear map), summed into RGB closures with baked
+    CIE 1931 / D65 weights (model/spectral_tables.py).  Transmitted and interference lobes
+    keep a bounded number of directions: each wavelength joins the lobe of the nearest of
+    the three RGB wavelengths (three directions with dispersion, one without), whose
+    centre and exponent are those of the group's wavelength nearest to it.
+    """
+    from .spectral_tables import tables
+
+    t = tables(plan.spectral)
+    lams, K, M = t["wavelengths"], t["cauchy"], t["rgb"]
+    groups = [min(range(3), key=lambda c: abs(WAVELENGTHS_NM[c] - lam)) if plan.dispersion else 0 for lam in lams]
+    leads = {}
+    for g in set(groups):
+        centre = WAVELENGTHS_NM[g] if plan.dispersion else WAVELENGTHS_NM[1]
+        leads[g] = min((j for j in range(len(lams)) if groups[j] == g), key=lambda j: abs(lams[j] - centre))
+    zero = (0.0, 0.0, 0.0)
+    state = dict(acc_R=zero, acc_D=zero, acc_T0=zero, acc_T1=zero, acc_T2=zero, acc_I0=zero, acc_I1=zero,
+                 acc_I2=zero, lead_T0=n0, lead_T1=n0, lead_T2=n0, lead_I0=n0, lead_I1=n0, lead_I2=n0,
+                 lead_eT=(1.0, 1.0, 1.0), lead_eI=(1.0, 1.0, 1.0), lead_aT=(1.0, 1.0, 1.0), lead_aI=(1.0, 1.0, 1.0))
+    for j, (k, lam, m) in enumerate(zip(K, lams, M)):
+        r1 = ops.clamp(k[0] * P["r1"][0] + k[1] * P["r1"][1] + k[2] * P["r1"][2], 0.1, 5.0)
+        member = [1.0 if groups[j] == g else 0.0 for g in range(3)]
+        is_lead = [1.0 if leads.get(g) == j else 0.0 for g in range(3)]
+        state = ops.call("spectral step", spectral_step,
+                         dict(state, r1=r1, lam=float(lam), m=tuple(float(x) for x in m),
+                              in0=member[0], in1=member[1], in2=member[2],
+                              is0=is_lead[0], is1=is_lead[1], is2=is_lead[2],
+                              e0=P["e0"], e1=P["e1"], ks=P["ks"], kd=P["kd"], r0=P["r0"], n0=n0, n1=n1, v=v, d=d),
+                         lobe=plan.lobe, diffuse=plan.diffuse)
+    res = ShadingResult()
+
+    def rgb(vec):
+        return tuple(ops.maximum(ops.dot(vec, _UNIT[c]), 0.0) for c in range(3))
+
+    if plan.diffuse:
+        res.diffuse = tuple(P["kd"] * b * x for b, x in zip(P["base"], rgb(state["acc_D"])))
+    if not plan.specular:
+        return res
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(state["acc_R"])))
+    for tag, label in (("T", "transmit"), ("I", "interfere")):
+        for g in sorted(leads):
+            res.glossy.append(Closure(f"{label}_{g}", state[f"lead_{tag}{g}"], ops.dot(state[f"lead_e{tag}"], _UNIT[g]),
+                                      ops.dot(state[f"lead_a{tag}"], _UNIT[g]), rgb(state[f"acc_{tag}{g}"])))
+    return res
+
+
 def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) -> ShadingResult:
     """Closures of the layered BRDF at one shading point.
 
@@ -225,6 +317,8 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     (3 values); ``n0``, ``n1``: unit normals; ``d``: thickness (nm); ``v``: unit view
     direction (towards the camera).
     """
+    if plan.spectral:
+        return shade_spectral(ops, P, n0, n1, d, v, plan)
     res = ShadingResult()
     if plan.diffuse:
         res.diffuse = diffuse_colour(ops, P, d, wavelengths)

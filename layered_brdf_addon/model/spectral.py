@@ -451,3 +451,34 @@ def interference_cutoff_nm(r1, tolerance_de: float = 1.0, modulation: float = 1.
     if not r > 0.0:
         raise ValueError(f"interference_cutoff_nm needs a positive index, got {r1!r}")
     return interference_cutoff_optical_nm(float(tolerance_de), float(modulation), float(level)) / r
+
+
+# ----------------------------------------------------------------------------
+# Baked tables for the shaders (which have no colour-science): model/data/spectral_tables.json.
+def shader_tables(n: int) -> dict:
+    """Wavelengths, the Cauchy matrix ``K`` (``r1(lambda_j) = K[j] . r1_rgb``) and the
+    spectrum-to-Rec.709 matrix ``M`` of ``spectral_sampling(n)``, as lists."""
+    s = spectral_sampling(n)
+    x = (_CAUCHY_SCALE_NM / np.asarray(WAVELENGTHS_NM)) ** 2
+    vander_inv = np.linalg.inv(np.stack([np.ones(3), x, x * x], axis=-1))
+    xj = (_CAUCHY_SCALE_NM / s.wavelengths) ** 2
+    K = np.stack([np.ones_like(xj), xj, xj * xj], axis=-1) @ vander_inv
+    return dict(wavelengths=s.wavelengths.tolist(), cauchy=K.tolist(), rgb=s.matrix.tolist())
+
+
+def write_shader_tables(path=None) -> str:
+    """(Re)write the baked tables; returns the path."""
+    import json
+    import os
+    from pathlib import Path
+
+    path = Path(path or Path(__file__).with_name("data") / "spectral_tables.json")
+    data = {str(n): shader_tables(n) for n in SAMPLE_COUNTS}
+    tmp = path.with_suffix(".partial")
+    tmp.write_text(json.dumps(data, indent=1))
+    os.replace(tmp, path)
+    return str(path)
+
+
+if __name__ == "__main__":
+    print(write_shader_tables())
