@@ -246,7 +246,7 @@ def _scripted_materials(scene):
     return mats
 
 
-def render_passes_osl(scene=None) -> Passes:
+def render_passes_osl(scene=None, keep: str | os.PathLike | None = None) -> Passes:
     """Passes of a scene whose layered materials use the OSL backend.
 
     Cycles writes no AOV under OSL shading, so the thickness and the normals are
@@ -256,7 +256,7 @@ def render_passes_osl(scene=None) -> Passes:
     from .material import SHADER_NODE
 
     scene = scene or bpy.context.scene
-    beauty = render_passes(scene)
+    beauty = render_passes(scene, keep)
     extra = {}
     for output, encode in (("Thickness", False), ("LowerNormal", True), ("UpperNormal", True)):
         saved = []

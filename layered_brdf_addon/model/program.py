@@ -231,10 +231,16 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
     groups travel packed in vectors.
     """
     out = {}
-    # max(d, d - |acc|) is d, but a shader compiler cannot see it: this step then waits for
-    # the previous one, and only the sums, not every wavelength's temporaries, stay alive
-    # (Cycles' SVM has a stack of 255 floats per shader).
-    d = ops.maximum(d, d - ops.length(acc_R))
+    # max(d, d - |state|) is d, but a shader compiler cannot see it: everything this step
+    # computes then waits for the whole previous state, so a compiler evaluates the steps one
+    # after the other and only the running state stays alive, whatever the number of
+    # wavelengths (Cycles' SVM has a stack of 255 floats per shader).
+    state = (acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc_I2, lead_T0, lead_T1, lead_T2,
+             lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI)
+    size = 0.0
+    for x in state:
+        size = size + ops.length(x)
+    d = ops.maximum(d, d - size)
     if diffuse:
         td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
         rho = ops.maximum(1.0 + ops.cos((4.0 * math.pi / lam) * r1 * d) * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)

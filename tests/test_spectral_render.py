@@ -1,0 +1,44 @@
+"""Spectral modes of the shading program: baked tables, the numpy closure form, and the guard in Blender."""
+import json
+
+import numpy as np
+import pytest
+
+from layered_brdf_addon.model import ParameterError, preset
+from layered_brdf_addon.model import closures as C
+from layered_brdf_addon.model.spectral import shader_tables
+from layered_brdf_addon.model.spectral_tables import PATH, SAMPLE_COUNTS
+from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
+
+
+def test_baked_tables_are_current():
+    data = json.loads(PATH.read_text())
+    for n in SAMPLE_COUNTS:
+        want = shader_tables(n)
+        for key in ("wavelengths", "cauchy", "rgb"):
+            assert np.allclose(data[str(n)][key], want[key], rtol=0, atol=1e-12), (n, key)
+
+
+
+def test_spectral_closure_form_converges_to_32_wavelengths():
+    cam = OrthoCamera(width=48, height=48)
+    sun = Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=1.0)
+    imgs = {}
+    for a in ("spectral8", "spectral16", "spectral32"):
+        p = preset("fig6_medium").replace(thickness_mode="height", accuracy=a)
+        imgs[a], geo = render_spheres(p, cam, sun, shading=C.closure_shading)
+        assert np.all(np.isfinite(imgs[a])) and np.all(imgs[a] >= 0)
+    e8 = np.abs(imgs["spectral8"] - imgs["spectral32"]).sum()
+    e16 = np.abs(imgs["spectral16"] - imgs["spectral32"]).sum()
+    assert e16 < e8
+
+
+@pytest.mark.slow
+def test_blender_refuses_spectral_modes_with_a_clear_error():
+    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.material import apply_layered_material
+
+    S.reset_blender()
+    spheres = S.build_scene(S.SceneSpec())
+    with pytest.raises(ParameterError, match="'accuracy'"):
+        apply_layered_material(spheres[0], preset("fig4_parallel").replace(accuracy="spectral16"), "nodes")
