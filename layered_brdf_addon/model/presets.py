@@ -20,7 +20,7 @@ PAPER_PRESETS: dict[str, dict] = {
                         ks=1.0, kd=0.7, normal_mode="tilted", tilt=10.0),
     # Fig. 5: lower normal correlated with thickness (the paper gives no values; these are ours).
     "fig5_correlated": dict(e0=150.0, e1=250.0, r1_r=1.4, r1_g=1.5, r1_b=1.7, d_min=100.0, d_max=400.0,
-                            ks=1.0, kd=0.0, normal_mode="correlated", bump_strength=4.0e-4,
+                            ks=1.0, kd=0.0, normal_mode="correlated", bump_strength=1.0e-4,
                             noise_scale=3.0),
     # Fig. 6: specular and diffuse, 14 degree deviation, three thickness ranges.
     "fig6_thin": dict(r1_r=1.5, r1_g=1.6, r1_b=1.8, normal_mode="tilted", tilt=14.0, e0=130.0, e1=130.0,
