@@ -4,7 +4,7 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-$(shell cksum pyproject.toml | cut -d' ' -f1)
-EXT_TOOL = $(shell $(PY) -c "import bpy, os; print(os.path.join(os.path.dirname(bpy.__file__), '5.0', 'scripts', 'addons_core', 'bl_pkg', 'cli', 'blender_ext.py'))")
+EXT_ZIP = dist/layered_brdf-$(shell sed -n 's/^version *= *"\(.*\)"/\1/p' blender_manifest.toml).zip
 
 .PHONY: demo test bench extension clean
 
@@ -25,9 +25,13 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_reference.py
 
 extension: $(STAMP)
-	mkdir -p dist
-	$(PY) $(EXT_TOOL) build --source-dir . --output-dir dist
-	$(PY) $(EXT_TOOL) validate dist/layered_brdf-*.zip
+	mkdir -p $(dir $(EXT_ZIP))
+	rm -f $(EXT_ZIP)
+	scripts="$$($(PY) -c "import bpy; print(bpy.utils.system_resource('SCRIPTS'))")" && \
+	tool="$$scripts/addons_core/bl_pkg/cli/blender_ext.py" && \
+	tags="$$scripts/modules/_bpy_internal/extensions/tags.py" && \
+	$(PY) "$$tool" build --source-dir . --output-filepath $(EXT_ZIP) --valid-tags "$$tags" && \
+	$(PY) "$$tool" validate $(EXT_ZIP) --valid-tags "$$tags"
 
 clean:
 	rm -rf dist out .pytest_cache

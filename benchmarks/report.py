@@ -1,0 +1,49 @@
+"""Markdown tables of the measured results (benchmarks/results/*.json) for the docs."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent / "results"
+
+
+def accuracy_tables() -> str:
+    d = json.loads((HERE / "accuracy.json").read_text())
+    modes = d["accuracy"]["modes"]
+    thr = d["throughput"]
+    out = ["| mode | specular mean / p95 | diffuse mean / p95 | numpy specular evals/s |", "|---|---|---|---|"]
+    for name, m in modes.items():
+        t = thr.get(name, {}).get("specular", float("nan"))
+        out.append(f"| {name} | {m['specular']['mean']:.2f} / {m['specular']['p95']:.2f} | "
+                   f"{m['diffuse']['mean']:.2f} / {m['diffuse']['p95']:.2f} | {t:,.0f} |")
+    out += ["", "| closure level (RGB) | vs 1 nm ground truth, mean / p95 | vs exact RGB model, mean / p95 | evals/s |",
+            "|---|---|---|---|"]
+    for name, lv in d["accuracy"]["closure_levels"].items():
+        g, r = lv["vs_ground_truth"]["all"], lv["vs_rgb_exact"]["all"]
+        t = thr.get(name, {}).get("specular", float("nan"))
+        out.append(f"| {name} | {g['mean']:.2f} / {g['p95']:.2f} | {r['mean']:.2f} / {r['p95']:.2f} | {t:,.0f} |")
+    return "\n".join(out)
+
+
+def cost_table() -> str:
+    d = json.loads((HERE / "render_cost.json").read_text())
+    rows = d["rows"]
+    by = {(r.get("preset"), r.get("backend"), r.get("lobe"), r.get("which")): r for r in rows}
+    out = [f"{d['size']} px sphere, {d.get('threads', 1)} thread, cost per sample from {d['samples'][0]} and "
+           f"{d['samples'][1]} samples", "",
+           "| configuration | backend | ms / sample | x Principled + Thin Film | planning saves |", "|---|---|---|---|---|"]
+    for r in rows:
+        saving = ""
+        if r.get("which") == "planned":
+            full = by[(r["preset"], r["backend"], r["lobe"], "full")]
+            saving = f"{1.0 - r['per_sample'] / full['per_sample']:.0%}"
+        lobe = f" ({r['lobe']})" if r.get("lobe") else ""
+        out.append(f"| {r['config']} | {r['backend']}{lobe} | {1000 * r['per_sample']:.2f} | "
+                   f"{r['vs_principled']:.1f} | {saving} |")
+    return "\n".join(out)
+
+
+if __name__ == "__main__":
+    print(accuracy_tables())
+    print()
+    print(cost_table())

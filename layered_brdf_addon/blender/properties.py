@@ -1,0 +1,414 @@
+"""The add-on's settings on materials and the functions that keep materials in step with them.
+
+Float parameters live in the shader node's input sockets (keyframes and drivers on
+them animate final renders); the other parameters (enums), the backend and the last
+preset are a :class:`LayeredBRDFSettings` property group on every material, generated
+from :data:`PARAM_SPECS`.  A material's tree is built for an effect plan; when edits
+change the plan, :func:`sync_material` rebuilds it.  Animated, driven or linked
+sockets count as taking any value, so the plan never has to change during a render.
+"""
+from __future__ import annotations
+
+import json
+import re
+from contextlib import contextmanager
+
+import bpy
+from bpy.app.handlers import persistent
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
+
+from ..model.params import PARAM_SPECS, LayeredParams, ParameterError, ParamSpec, iter_sockets
+from ..model.plan import EffectPlan, plan_effects
+from . import assets
+from . import material as M
+from . import osl as osl_backend
+from ._deps import node_group_builder
+
+SETTINGS = "layered_brdf_settings"  # the PointerProperty on bpy.types.Material
+BUILD_KEY = "layered_brdf_build"  # written by apply_layered_material
+ENUMS_KEY = "layered_brdf_enums"
+BACKEND_KEY = "layered_brdf_backend"
+SYNC_KEY = "layered_brdf_synced"  # the _signature of the last synchronisation
+
+BACKEND_ITEMS = (
+    ("nodes", "Node group", "Stock shader nodes: Cycles and EEVEE, CPU and GPU"),
+    ("osl", "OSL", "Open Shading Language script: Cycles on the CPU, or on the GPU with OptiX"),
+)
+
+# The effect each animatable parameter switches on or off (see model/plan.py).
+EFFECT_OF = {"ks": "specular", "kd": "diffuse", "d_min": "thickness", "d_max": "thickness",
+             "tilt": "normals", "bump_strength": "normals", "r1_r": "dispersion", "r1_g": "dispersion",
+             "r1_b": "dispersion"}
+
+_suspended = 0
+
+
+@contextmanager
+def suspended_updates():
+    """Write settings without their update callbacks rebuilding the material."""
+    global _suspended
+    _suspended += 1
+    try:
+        yield
+    finally:
+        _suspended -= 1
+
+
+UNIT_LABELS = {"deg": "\u00b0"}
+
+
+def param_label(spec: ParamSpec) -> str:
+    """The label with its unit, e.g. ``Thickness min (nm)``."""
+    return f"{spec.label} ({UNIT_LABELS.get(spec.unit, spec.unit)})" if spec.unit else spec.label
+
+
+def param_tooltip(name: str) -> str:
+    """Description, allowed range and typical range of a parameter."""
+    spec = LayeredParams.spec(name)
+    text = f"{spec.description}. Allowed: {spec.allowed}"
+    if spec.soft_min is not None and spec.soft_max is not None:
+        unit = f" {spec.unit}" if spec.unit else ""
+        text += f"; typical: {spec.soft_min:g} to {spec.soft_max:g}{unit}"
+    return text
+
+
+def setting_specs() -> list[ParamSpec]:
+    """The parameters that are not shader inputs: properties of the settings group."""
+    return [s for s in PARAM_SPECS if not s.socket]
+
+
+def _updater(name: str):
+    def update(self, context):
+        if _suspended:
+            return
+        mat = self.id_data
+        if mat is None or mat.library is not None or not is_layered(mat):
+            return
+        adopt(mat, keep=name)
+        try:
+            sync_material(mat)
+        except ParameterError:
+            return  # the material is left as it was; the panel shows the reason (material_problem)
+
+    return update
+
+
+def _option_label(option: str) -> str:
+    return option.replace("_", " ").title()
+
+
+def _spec_property(spec: ParamSpec):
+    if spec.kind == "enum":
+        items = [(o, _option_label(o), f"{spec.label}: {o}") for o in spec.options]
+        return EnumProperty(name=spec.label, description=spec.description, items=items, default=spec.default,
+                            update=_updater(spec.name))
+    if spec.kind == "bool":
+        return BoolProperty(name=spec.label, description=spec.description, default=spec.default,
+                            update=_updater(spec.name))
+    kw = dict(name=spec.label, description=spec.description, default=spec.default, update=_updater(spec.name))
+    if spec.min > -3.0e38:
+        kw["min"] = spec.min
+    if spec.max < 3.0e38:
+        kw["max"] = spec.max
+    if spec.soft_min is not None:
+        kw["soft_min"] = spec.soft_min
+    if spec.soft_max is not None:
+        kw["soft_max"] = spec.soft_max
+    return FloatProperty(**kw)
+
+
+def _settings_class():
+    ann = {s.name: _spec_property(s) for s in setting_specs()}
+    ann["backend"] = EnumProperty(name="Backend", description="How the material is built", items=BACKEND_ITEMS,
+                                  default="nodes", update=_updater("backend"))
+    ann["preset"] = StringProperty(name="Preset", description="The preset last loaded into the material")
+    ann["adopted"] = BoolProperty(name="Adopted", options={"HIDDEN"},
+                                  description="The settings describe the material (copied from it once)")
+    return type("LayeredBRDFSettings", (bpy.types.PropertyGroup,),
+                {"__annotations__": ann, "__doc__": "Layered BRDF settings of a material"})
+
+
+LayeredBRDFSettings = _settings_class()
+
+
+# --- reading a material ----------------------------------------------------------------
+def is_layered(mat) -> bool:
+    return mat is not None and bool(mat.get(M.MATERIAL_KEY))
+
+
+def settings(mat):
+    return getattr(mat, SETTINGS)
+
+
+def _setting_values(mat) -> dict:
+    st = settings(mat)
+    return {s.name: getattr(st, s.name) for s in setting_specs()}
+
+
+def _check_local(mat) -> None:
+    if mat.library is not None:
+        raise ParameterError("material", mat.name, f"a local material: it is linked from "
+                             f"{mat.library.filepath}; make it local to edit it")
+
+
+def params_of(mat) -> LayeredParams:
+    """The material's parameters: floats from the shader's sockets, the rest from its settings."""
+    node = M.shader_node(mat)
+    if node is None:
+        raise ParameterError("material", mat.name, "a material holding the 'Layered BRDF' shader node "
+                             "(apply the layered material first)")
+    return M.read_inputs(node, base=LayeredParams.from_dict(_setting_values(mat)))
+
+
+def check_backend(params: LayeredParams, backend: str) -> None:
+    if backend == "nodes" and params.lobe != "beckmann":
+        raise ParameterError("lobe", params.lobe, "'beckmann' with the node-group backend "
+                             "(choose the OSL backend for 'phong')")
+
+
+_SOCKET_PATH = re.compile(r'nodes\["(?P<node>(?:[^"\\]|\\.)*)"\]\.inputs\[(?P<index>\d+|"(?:[^"\\]|\\.)*")\]'
+                          r'\.default_value')
+
+
+def _action_paths(action):
+    if action is None:
+        return
+    for layer in action.layers:
+        for strip in layer.strips:
+            for bag in strip.channelbags:
+                for fc in bag.fcurves:
+                    yield fc.data_path
+
+
+def _animated_paths(owner):
+    ad = owner.animation_data
+    if ad is None:
+        return
+    yield from _action_paths(ad.action)
+    for track in ad.nla_tracks:
+        for strip in track.strips:
+            yield from _action_paths(strip.action)
+    for fc in ad.drivers:
+        yield fc.data_path
+
+
+def animated_parameters(mat) -> set[str]:
+    """Shader inputs whose value varies: keyframed, driven, or fed by a link."""
+    node = M.shader_node(mat)
+    if node is None:
+        return set()
+    names = {s.name for s in iter_sockets() if node.inputs[s.name].is_linked}
+    prefixes = ((mat.node_tree, ""), (mat, "node_tree."))
+    for owner, prefix in prefixes:
+        for path in _animated_paths(owner):
+            if not path.startswith(prefix):
+                continue
+            m = _SOCKET_PATH.fullmatch(path[len(prefix):])
+            if m is None or m.group("node") != node.name:
+                continue
+            index = m.group("index")
+            if index.isdigit():
+                i = int(index)
+                if i < len(node.inputs):
+                    names.add(node.inputs[i].name)
+            else:
+                key = index[1:-1]
+                sock = node.inputs.get(key)
+                names.add(sock.name if sock is not None else key)
+    return names & {s.name for s in iter_sockets()}
+
+
+def conservative_plan(params: LayeredParams, animated: set[str]) -> EffectPlan:
+    """The effect plan for every value the ``animated`` parameters may take.
+
+    An animated parameter counts as making its effect active: animated ``ks``/``kd`` keep
+    their part, animated ``d_min``/``d_max`` keep the thickness pattern, animated ``tilt``
+    or ``bump_strength`` keep the lower normal, an animated index keeps dispersion.
+    """
+    plan = plan_effects(params)
+    touched = {EFFECT_OF[n] for n in animated if n in EFFECT_OF}
+    if not touched:
+        return plan
+    fields = plan.to_dict()
+    for flag in ("specular", "diffuse", "dispersion"):
+        if flag in touched:
+            fields[flag] = True
+    varying = params.d_min != params.d_max or "thickness" in touched
+    fields["thickness"] = params.thickness_mode if varying else "constant"
+    normals = params.normal_mode
+    if normals == "tilted" and params.tilt == 0.0 and "tilt" not in animated:
+        normals = "parallel"
+    if normals == "correlated" and (not varying or (params.bump_strength == 0.0 and "bump_strength" not in animated)):
+        normals = "parallel"
+    fields["normals"] = normals
+    return EffectPlan(**fields)
+
+
+def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
+    """What the material should be built as: (parameters, backend, plan); ParameterError if it can't be."""
+    _check_local(mat)
+    params = params_of(mat)
+    backend = settings(mat).backend
+    check_backend(params, backend)
+    return params, backend, conservative_plan(params, animated_parameters(mat))
+
+
+def material_problem(mat) -> str | None:
+    """Why the material cannot be edited or rebuilt now, or None."""
+    try:
+        desired(mat)
+    except ParameterError as e:
+        return str(e)
+    return None
+
+
+def _signature(mat, params: LayeredParams, backend: str, plan: EffectPlan) -> str:
+    """What the material was last synchronised to: backend, plan, settings and the build it got."""
+    return json.dumps({"backend": backend, "plan": plan.to_dict(),
+                       "settings": {s.name: getattr(params, s.name) for s in setting_specs()},
+                       "build": mat.get(BUILD_KEY)}, sort_keys=True)
+
+
+def _in_sync(mat, params: LayeredParams, backend: str, plan: EffectPlan, check_sources: bool) -> bool:
+    """Whether ``mat`` is built as wanted (OSL sources compared only with ``check_sources``)."""
+    if mat.get(SYNC_KEY) != _signature(mat, params, backend, plan):
+        return False
+    node = M.shader_node(mat)
+    if node is None:
+        return False
+    if backend == "nodes":
+        return node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and \
+            node_group_builder.is_current(node.node_tree, plan)
+    if node.bl_idname != "ShaderNodeScript" or node.script is None:
+        return False
+    return not check_sources or node.script.as_string() == osl_backend.source(plan)
+
+
+# --- changing a material -----------------------------------------------------------------
+def write_settings(mat, params: LayeredParams, backend: str) -> None:
+    st = settings(mat)
+    with suspended_updates():
+        for s in setting_specs():
+            if getattr(st, s.name) != getattr(params, s.name):
+                setattr(st, s.name, getattr(params, s.name))
+        if st.backend != backend:
+            st.backend = backend
+        st.adopted = True
+
+
+def adopt(mat, keep: str | None = None) -> None:
+    """Copy a material's built enums and backend into its settings, once (e.g. made by a script).
+
+    ``keep`` names a setting the user has just changed: it is not overwritten.
+    """
+    st = settings(mat)
+    if st.adopted:
+        return
+    stored = mat.get(ENUMS_KEY)
+    values = dict(stored.to_dict()) if stored is not None else {}
+    backend = mat.get(BACKEND_KEY)
+    if backend is not None:
+        values["backend"] = backend
+    with suspended_updates():
+        for s in setting_specs():
+            if s.name in values and s.name != keep:
+                setattr(st, s.name, s.check(values[s.name]))
+        if "backend" in values and keep != "backend":
+            if values["backend"] not in M.BACKENDS:
+                raise ParameterError("backend", values["backend"], "one of " + ", ".join(map(repr, M.BACKENDS)))
+            st.backend = values["backend"]
+        st.adopted = True
+
+
+def _apply(target, params: LayeredParams, backend: str, plan: EffectPlan, preview: bool):
+    mat = M.apply_layered_material(target, params, backend, plan=plan)
+    write_settings(mat, params, backend)
+    mat[SYNC_KEY] = _signature(mat, params, backend, plan)
+    assets.publish(mat, plan, preview=preview)
+    return mat
+
+
+def sync_material(mat, check_sources: bool = False) -> bool:
+    """Rebuild ``mat`` when its settings, its sockets' effects or its shader's version call for it.
+
+    Returns True when the material was rebuilt or rewritten.  Raises ParameterError when it can't be.
+    """
+    adopt(mat)
+    params, backend, plan = desired(mat)
+    if _in_sync(mat, params, backend, plan, check_sources):
+        return False
+    _apply(mat, params, backend, plan, preview=False)
+    return True
+
+
+def layered_material_of(obj):
+    mat = obj.active_material if obj is not None else None
+    return mat if is_layered(mat) else None
+
+
+def apply_to_object(obj, params: LayeredParams | None = None, backend: str | None = None, preview: bool = True):
+    """Give ``obj`` the layered material (reusing its own), with ``params`` or the current values.
+
+    The node group is marked as an asset; with ``preview`` its preview is rendered when missing.
+    """
+    mat = layered_material_of(obj)
+    if mat is not None:
+        _check_local(mat)
+        adopt(mat)
+    if params is None:
+        params = params_of(mat) if mat is not None and M.shader_node(mat) is not None else LayeredParams()
+    params = params.validate()
+    if backend is None:
+        backend = settings(mat).backend if mat is not None else "nodes"
+    if backend not in M.BACKENDS:
+        raise ParameterError("backend", backend, "one of " + ", ".join(repr(b) for b in M.BACKENDS))
+    check_backend(params, backend)
+    animated = animated_parameters(mat) if mat is not None else set()
+    return _apply(obj, params, backend, conservative_plan(params, animated), preview)
+
+
+def remove_from_object(obj) -> bool:
+    mat = layered_material_of(obj)
+    if mat is None:
+        return False
+    return M.remove_layered_material(obj)
+
+
+def _editable(mat) -> bool:
+    return is_layered(mat) and mat.library is None and M.shader_node(mat) is not None
+
+
+def _editable_layered_materials():
+    return [m for m in bpy.data.materials if _editable(m)]
+
+
+def upgrade_all() -> list[str]:
+    """Rebuild the local layered materials whose node group or OSL text is out of date."""
+    done = []
+    for mat in _editable_layered_materials():
+        try:
+            if sync_material(mat, check_sources=True):
+                done.append(mat.name)
+        except ParameterError:
+            continue  # left as saved; the panel shows the reason
+    return done
+
+
+# --- handlers ----------------------------------------------------------------------------
+@persistent
+def on_depsgraph_update(scene, depsgraph):
+    if depsgraph.mode != "VIEWPORT" or bpy.app.is_job_running("RENDER"):
+        return
+    updated = [u.id.original for u in depsgraph.updates if isinstance(u.id, bpy.types.Material)]
+    for mat in updated:
+        if not _editable(mat):
+            continue
+        try:
+            sync_material(mat)
+        except ParameterError:
+            continue  # left as it is; the panel shows the reason
+
+
+@persistent
+def on_load_post(*_args):
+    upgrade_all()

@@ -1,0 +1,172 @@
+"""The Layered BRDF panel in Properties > Material, its parameter sub-panels and preset menus.
+
+Float parameters are drawn straight from the shader node's input sockets, so a keyframe
+or driver added from the panel animates the socket the renderer reads.
+"""
+from __future__ import annotations
+
+from bpy.types import Menu, Panel
+
+from ..model.params import PARAM_SPECS
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
+from . import material as M
+from . import osl, properties, user_presets
+
+MAIN_PANEL = "LAYERED_BRDF_PT_material"
+
+
+def preset_title(identifier: str) -> str:
+    if identifier.startswith(user_presets.USER_PREFIX):
+        return identifier[len(user_presets.USER_PREFIX):]
+    return identifier.replace("_", " ").capitalize()
+
+
+def draw_param(layout, mat, node, spec) -> None:
+    """One parameter: its socket (floats) or its setting (enums), labelled with the unit, and a tooltip."""
+    row = layout.row(align=True)
+    text = properties.param_label(spec)
+    if spec.socket:
+        sock = node.inputs[spec.name]
+        if sock.is_linked:
+            row.label(text=f"{text}: from a link", icon="LINKED")
+        else:
+            row.prop(sock, "default_value", text=text)
+    else:
+        row.prop(properties.settings(mat), spec.name, text=text)
+    row.operator("layered_brdf.param_info", text="", icon="QUESTION", emboss=False).param = spec.name
+
+
+def _alert(layout, text, icon="ERROR"):
+    col = layout.column(align=True)
+    col.alert = True
+    col.label(text=text, icon=icon)
+    return col
+
+
+def draw_material(layout, context) -> None:
+    obj = context.object
+    mat = obj.active_material
+    if mat is not None and mat.library is not None:
+        _alert(layout, f"'{mat.name}' is linked from {mat.library.filepath}: make it local to edit it",
+               icon="LIBRARY_DATA_DIRECT")
+        if properties.is_layered(mat):
+            return
+    if not properties.is_layered(mat):
+        layout.operator("layered_brdf.apply", icon="SHADING_RENDERED")
+        layout.menu(LAYERED_BRDF_MT_presets.__name__, text="Apply a Preset", icon="PRESET")
+        return
+    st = properties.settings(mat)
+    row = layout.row(align=True)
+    row.menu(LAYERED_BRDF_MT_presets.__name__, text=preset_title(st.preset) if st.preset else "Presets",
+             icon="PRESET")
+    row.operator("layered_brdf.save_preset", text="", icon="ADD")
+    row.menu(LAYERED_BRDF_MT_delete_presets.__name__, text="", icon="REMOVE")
+    layout.prop(st, "backend", expand=True)
+    if st.backend == "osl":
+        ok, reason = osl.scene_supports_osl(context.scene)
+        if not ok:
+            col = _alert(layout, f"OSL will not run: {reason}")
+            col.operator("layered_brdf.enable_osl", icon="SETTINGS")
+    problem = properties.material_problem(mat)
+    if problem:
+        _alert(layout, problem)
+    row = layout.row(align=True)
+    row.operator("layered_brdf.apply", text="Rebuild", icon="FILE_REFRESH")
+    row.operator("layered_brdf.mark_asset", text="Mark Asset", icon="ASSET_MANAGER")
+    row.operator("layered_brdf.remove", text="", icon="X")
+    if M.shader_node(mat) is None:
+        layout.label(text="The material has no Layered BRDF node: Rebuild restores it", icon="INFO")
+    elif problem is None:
+        _, _, plan = properties.desired(mat)
+        col = layout.column(align=True)
+        col.label(text=f"Effects ({plan.key}):")
+        for line in plan.describe():
+            col.label(text=line, icon="DOT")
+
+
+class LAYERED_BRDF_PT_material(Panel):
+    """Layered BRDF: iridescent layered material of the active object"""
+
+    bl_label = "Layered BRDF"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.object
+        return obj is not None and hasattr(obj.data, "materials")
+
+    def draw(self, context):
+        draw_material(self.layout, context)
+
+
+class _ParamsPanel(Panel):
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+    bl_parent_id = MAIN_PANEL
+    group = ""
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.object
+        mat = properties.layered_material_of(obj) if obj is not None and hasattr(obj.data, "materials") else None
+        return mat is not None and mat.library is None and M.shader_node(mat) is not None
+
+    def draw(self, context):
+        mat = context.object.active_material
+        node = M.shader_node(mat)
+        self.layout.use_property_split = False
+        for spec in PARAM_SPECS:
+            if spec.group == self.group:
+                draw_param(self.layout, mat, node, spec)
+
+
+def _params_panels():
+    groups = list(dict.fromkeys(s.group for s in PARAM_SPECS))
+    panels = []
+    for k, group in enumerate(groups):
+        ident = "".join(c if c.isalnum() else "_" for c in group.lower())
+        panels.append(type(f"LAYERED_BRDF_PT_params_{ident}", (_ParamsPanel,), {
+            "bl_label": group, "group": group, "bl_order": k,
+            "bl_options": set() if k == 0 else {"DEFAULT_CLOSED"},
+            "__doc__": f"Layered BRDF parameters: {group}",
+        }))
+    return tuple(panels)
+
+
+PARAM_PANELS = _params_panels()
+
+
+class LAYERED_BRDF_MT_presets(Menu):
+    """Paper figures, artist presets and your saved presets"""
+
+    bl_label = "Layered BRDF Presets"
+
+    def draw(self, context):
+        layout = self.layout
+        sections = (("Paper figures", list(PAPER_PRESETS)), ("Artist presets", list(ARTIST_PRESETS)),
+                    ("User presets", [user_presets.USER_PREFIX + n for n in user_presets.user_preset_names()]))
+        for k, (title, identifiers) in enumerate(sections):
+            if k:
+                layout.separator()
+            layout.label(text=title)
+            for ident in identifiers:
+                layout.operator("layered_brdf.load_preset", text=preset_title(ident)).preset = ident
+            if not identifiers:
+                layout.label(text="None saved yet (+ saves one)", icon="INFO")
+
+
+class LAYERED_BRDF_MT_delete_presets(Menu):
+    """Delete one of your saved presets"""
+
+    bl_label = "Delete User Preset"
+
+    def draw(self, context):
+        layout = self.layout
+        names = user_presets.user_preset_names()
+        for name in names:
+            layout.operator("layered_brdf.delete_preset", text=name, icon="X").preset = name
+        if not names:
+            layout.label(text="No user presets", icon="INFO")

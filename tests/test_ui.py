@@ -1,0 +1,519 @@
+"""The add-on inside Blender: registration, panel, operators, presets, handlers, assets, renders.
+
+Renders are compared with the numpy closure form (what Cycles' closures evaluate to) at a
+coarse tolerance: a pixel fails when a channel is off by more than 5% (plus a small floor),
+and at most 2% of each sphere's lit pixels may fail.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import bpy
+import numpy as np
+import pytest
+
+import layered_brdf_addon
+from layered_brdf_addon.blender import assets, osl, properties, registration, ui, user_presets
+from layered_brdf_addon.blender import scene as S
+from layered_brdf_addon.blender.material import shader_node
+from layered_brdf_addon.model import LayeredParams, preset, render_spheres
+from layered_brdf_addon.model.closures import closure_shading
+from layered_brdf_addon.model.compare import agreement, lit_mask
+from layered_brdf_addon.model.params import PARAM_SPECS, iter_sockets
+from layered_brdf_addon.model.presets import PRESETS
+from layered_brdf_addon.model.sphere import Sun
+from node_groups import layered as node_group_builder
+
+ROOT = Path(__file__).resolve().parents[1]
+# 40 degrees off the view, above it: spheres in a row along x don't shadow each other.
+SUN = Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=1.0)
+REL_TOL = 0.05
+MAX_FAILING = 0.02
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    S.reset_blender()
+    layered_brdf_addon.register()
+    yield
+    layered_brdf_addon.unregister()
+    S.reset_blender()
+
+
+@pytest.fixture
+def user_dir(tmp_path, monkeypatch):
+    path = tmp_path / "presets"
+    path.mkdir()
+    monkeypatch.setattr(user_presets, "presets_dir", lambda: path)
+    return path
+
+
+def spheres(n=1, height=64, osl=False):
+    S.reset_blender()
+    cam = S.camera_for(n, height)
+    centers = S.row_of_spheres(n)
+    objs = S.build_scene(S.SceneSpec(camera=cam, sun=SUN, centers=centers, osl=osl))
+    return objs, cam, centers
+
+
+def plain_object():
+    """A new file holding one small sphere in a Cycles scene (for tests that do not render)."""
+    import bmesh
+
+    S.reset_blender()
+    mesh = bpy.data.meshes.new("Small")
+    bm = bmesh.new()
+    bmesh.ops.create_uvsphere(bm, u_segments=16, v_segments=8, radius=1.0)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = bpy.data.objects.new("Small", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.scene.render.engine = "CYCLES"
+    return activate(obj)
+
+
+def activate(obj):
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def load_preset(obj, name):
+    activate(obj)
+    assert bpy.ops.layered_brdf.load_preset(preset=name) == {"FINISHED"}
+    return obj.active_material
+
+
+def built_plan(mat):
+    """Key of the effect plan the material's node group was built for."""
+    node = shader_node(mat)
+    assert node.bl_idname == "ShaderNodeGroup"
+    return node.node_tree[node_group_builder.PLAN_KEY]
+
+
+def osl_built_for(mat, plan):
+    node = shader_node(mat)
+    return node.bl_idname == "ShaderNodeScript" and node.script.as_string() == osl.source(plan)
+
+
+def socket_values(mat):
+    node = shader_node(mat)
+    return {s.name: node.inputs[s.name].default_value for s in iter_sockets()}
+
+
+def expected_closure_form(params_list, cam, centers, passes):
+    return render_spheres(params_list, cam, SUN, centers, thickness=passes.thickness,
+                          lower_normals=passes.lower_normal, shading=closure_shading)
+
+
+def assert_matches(beauty, expected, geo, k, label):
+    mask = lit_mask(geo, SUN.l) & (geo.sphere == k)
+    ag = agreement(beauty, expected, mask, rel_tol=REL_TOL)
+    assert ag.failing_fraction <= MAX_FAILING, f"{label}: {ag}"
+
+
+class Layout:
+    """Records what a panel draws (stands in for UILayout, which needs a window)."""
+
+    def __init__(self, log):
+        self.log = log
+        self.alert = False
+        self.enabled = True
+        self.active = True
+        self.use_property_split = False
+        self.use_property_decorate = False
+
+    def row(self, **_):
+        return Layout(self.log)
+
+    column = box = row
+
+    def label(self, text="", icon="NONE", **_):
+        self.log.append(("label", text, self.alert))
+
+    def prop(self, data, prop, text=None, **_):
+        assert prop in data.bl_rna.properties, f"{data!r} has no property {prop}"
+        self.log.append(("prop", data, prop, text))
+
+    def operator(self, idname, text=None, **_):
+        props = SimpleNamespace()
+        self.log.append(("operator", idname, text, props))
+        return props
+
+    def menu(self, menu, text="", **_):
+        assert getattr(bpy.types, menu, None) is not None, f"menu {menu} is not registered"
+        self.log.append(("menu", menu, text))
+
+    def separator(self, **_):
+        pass
+
+
+def draw_panels(obj):
+    log = []
+    ctx = SimpleNamespace(object=obj, scene=bpy.context.scene)
+    ui.LAYERED_BRDF_PT_material.draw(SimpleNamespace(layout=Layout(log)), ctx)
+    for panel in ui.PARAM_PANELS:
+        if panel.poll(ctx):
+            panel.draw(SimpleNamespace(layout=Layout(log), group=panel.group), ctx)
+    return log
+
+
+def labels(log, alert=None):
+    return [e[1] for e in log if e[0] == "label" and (alert is None or e[2] == alert)]
+
+
+# --- registration --------------------------------------------------------------------------
+def _leftovers():
+    out = []
+    if hasattr(bpy.types.Material, properties.SETTINGS):
+        out.append("Material property")
+    out += [cls.__name__ for cls in registration.CLASSES if registration._registered_versions(cls)]
+    for handlers in (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.load_post):
+        out += [f.__qualname__ for f in handlers if getattr(f, "__module__", "").startswith("layered_brdf_addon")]
+    return out
+
+
+def test_register_twice_then_unregister_leaves_nothing():
+    layered_brdf_addon.register()  # already registered by the fixture
+    assert sum(f is properties.on_depsgraph_update for f in bpy.app.handlers.depsgraph_update_post) == 1
+    assert sum(f is properties.on_load_post for f in bpy.app.handlers.load_post) == 1
+    assert all(cls.is_registered for cls in registration.CLASSES)
+    layered_brdf_addon.unregister()
+    try:
+        assert _leftovers() == []
+        assert not hasattr(bpy.types, "LAYERED_BRDF_OT_apply")
+        assert not hasattr(bpy.types, ui.MAIN_PANEL)
+        layered_brdf_addon.unregister()  # unregistering twice is harmless
+    finally:
+        layered_brdf_addon.register()
+    assert registration.is_registered()
+
+
+def test_settings_and_panel_come_from_param_specs():
+    rna = properties.LayeredBRDFSettings.bl_rna.properties
+    for spec in PARAM_SPECS:
+        if spec.socket:
+            continue
+        assert rna[spec.name].description == spec.description
+        assert [i.identifier for i in rna[spec.name].enum_items] == list(spec.options)
+        assert rna[spec.name].default == spec.default
+    obj = plain_object()
+    mat = load_preset(obj, "beetle_shell")
+    log = draw_panels(obj)
+    drawn = {e[3]: e for e in log if e[0] == "prop"}
+    node = shader_node(mat)
+    for spec in PARAM_SPECS:
+        text = properties.param_label(spec)
+        assert text in drawn, f"{spec.name} not drawn"
+        data, prop = drawn[text][1], drawn[text][2]
+        if spec.socket:  # floats are the shader's own sockets: keyframes on them animate renders
+            assert data == node.inputs[spec.name] and prop == "default_value"
+        else:
+            assert data == properties.settings(mat) and prop == spec.name
+    assert "Thickness min (nm)" in drawn and "Tilt (\u00b0)" in drawn
+    infos = [e[3].param for e in log if e[0] == "operator" and e[1] == "layered_brdf.param_info"]
+    assert sorted(infos) == sorted(s.name for s in PARAM_SPECS)
+    tip = properties.param_tooltip("d_min")
+    assert LayeredParams.spec("d_min").description in tip and "nm" in tip and "2000" in tip
+    assert any(e[0] == "menu" and e[1] == "LAYERED_BRDF_MT_presets" for e in log)
+    assert labels(log, alert=True) == []
+
+
+def test_osl_backend_warns_when_the_scene_cannot_run_it():
+    obj = plain_object()
+    mat = load_preset(obj, "fig4_parallel")
+    values = socket_values(mat)
+    properties.settings(mat).backend = "osl"  # the update callback rebuilds the material
+    assert osl_built_for(mat, properties.desired(mat)[2])
+    assert socket_values(mat) == pytest.approx(values)
+    warnings = labels(draw_panels(obj), alert=True)
+    assert any("OSL will not run" in w and "Open Shading Language option is off" in w for w in warnings), warnings
+    assert bpy.ops.layered_brdf.enable_osl() == {"FINISHED"}
+    assert bpy.context.scene.cycles.shading_system
+    assert labels(draw_panels(obj), alert=True) == []
+    # Phong lobes exist only in OSL: back on the node backend the material stays as it is and says why.
+    properties.settings(mat).lobe = "phong"
+    plan = properties.desired(mat)[2]
+    assert plan.lobe == "phong" and osl_built_for(mat, plan)
+    properties.settings(mat).backend = "nodes"
+    assert shader_node(mat).bl_idname == "ShaderNodeScript"
+    assert "lobe" in properties.material_problem(mat)
+    assert any("'beckmann' with the node-group backend" in w for w in labels(draw_panels(obj), alert=True))
+    with pytest.raises(RuntimeError, match="lobe"):
+        bpy.ops.layered_brdf.apply()
+    properties.settings(mat).lobe = "beckmann"
+    assert shader_node(mat).bl_idname == "ShaderNodeGroup"
+
+
+# --- every preset, both backends, against numpy ----------------------------------------------
+@pytest.fixture(scope="module", params=["nodes", "osl"])
+def preset_row(request):
+    backend = request.param
+    names = list(PRESETS)
+    objs, cam, centers = spheres(len(names), osl=(backend == "osl"))
+    for obj, name in zip(objs, names):
+        if backend == "nodes":
+            load_preset(obj, name)  # through the operator
+        else:
+            properties.apply_to_object(obj, preset(name), backend="osl")
+    passes = S.render_passes_osl() if backend == "osl" else S.render_passes()
+    return SimpleNamespace(backend=backend, names=names, objs=objs, cam=cam, centers=centers, passes=passes)
+
+
+@pytest.mark.slow
+def test_every_preset_renders_like_the_closure_form(preset_row):
+    r = preset_row
+    params = [preset(n) for n in r.names]
+    for obj, p in zip(r.objs, params):
+        mat = obj.active_material
+        assert shader_node(mat).bl_idname == ("ShaderNodeGroup" if r.backend == "nodes" else "ShaderNodeScript")
+        assert socket_values(mat) == pytest.approx({s.name: getattr(p, s.name) for s in iter_sockets()}, rel=1e-6)
+    beauty = r.passes.beauty
+    assert np.all(np.isfinite(beauty))
+    expected, geo = expected_closure_form(params, r.cam, r.centers, r.passes)
+    for k, name in enumerate(r.names):
+        assert_matches(beauty, expected, geo, k, f"{r.backend} {name}")
+
+
+# --- edits, effect plans, animation ------------------------------------------------------------
+def test_socket_and_setting_edits_update_the_shader_without_new_groups(monkeypatch):
+    obj = plain_object()
+    mat = load_preset(obj, "fig4_parallel")
+    node = shader_node(mat)
+    pointer, key, groups = node.as_pointer(), built_plan(mat), len(bpy.data.node_groups)
+    node.inputs["d_max"].default_value = 90.0
+    bpy.context.view_layer.update()
+    node = shader_node(mat)
+    assert node.as_pointer() == pointer and built_plan(mat) == key
+    assert len(bpy.data.node_groups) == groups
+    assert properties.params_of(mat).d_max == 90.0
+    # An enum edit that leaves the plan alone (a tilt of 0 is no tilt) only records the setting.
+    properties.settings(mat).normal_mode = "tilted"
+    assert shader_node(mat).as_pointer() == pointer and built_plan(mat) == key
+    assert mat["layered_brdf_enums"]["normal_mode"] == "tilted"
+    assert len(bpy.data.node_groups) == groups
+    # Settled: further depsgraph updates apply nothing (the handler's own writes don't feed back).
+    calls = []
+    apply = properties.M.apply_layered_material
+    monkeypatch.setattr(properties.M, "apply_layered_material", lambda *a, **k: calls.append(a) or apply(*a, **k))
+    for _ in range(3):
+        bpy.context.view_layer.update()
+    assert calls == []
+
+
+def test_toggling_an_effect_rebuilds_the_tree():
+    obj = plain_object()
+    mat = load_preset(obj, "fig4_parallel")
+    assert built_plan(mat) == "SDNPXB"
+    shader_node(mat).inputs["ks"].default_value = 0.0
+    bpy.context.view_layer.update()
+    assert built_plan(mat) == "sDNPXB"
+    assert shader_node(mat).node_tree.name == node_group_builder.group_name(properties.desired(mat)[2])
+    properties.settings(mat).normal_mode = "tilted"
+    shader_node(mat).inputs["tilt"].default_value = 12.0
+    bpy.context.view_layer.update()
+    assert built_plan(mat) == "sDNTXB"
+    node = shader_node(mat)
+    node.inputs["d_min"].default_value = node.inputs["d_max"].default_value
+    bpy.context.view_layer.update()
+    assert built_plan(mat) == "sDCTXB"
+    bpy.context.view_layer.update()  # settled: a further update changes nothing
+    assert built_plan(mat) == "sDCTXB"
+    assert shader_node(mat).inputs["tilt"].default_value == pytest.approx(12.0)
+
+
+def test_animated_driven_or_linked_sockets_keep_their_effects():
+    obj = plain_object()
+    mat = load_preset(obj, "fig4_parallel")
+    node = shader_node(mat)
+    node.inputs["ks"].default_value = 0.0
+    node.inputs["ks"].keyframe_insert("default_value", frame=1)
+    node.inputs["ks"].default_value = 1.0
+    node.inputs["ks"].keyframe_insert("default_value", frame=10)
+    node.inputs["bump_strength"].driver_add("default_value")
+    value = mat.node_tree.nodes.new("ShaderNodeValue")
+    mat.node_tree.links.new(value.outputs[0], node.inputs["kd"])
+    assert properties.animated_parameters(mat) == {"ks", "bump_strength", "kd"}
+    p = preset("fig4_parallel").replace(ks=0.0, kd=0.0, tilt=0.0, normal_mode="tilted")
+    assert properties.conservative_plan(p, set()).key == "sdNPXB"
+    assert properties.conservative_plan(p, {"ks", "kd"}).key == "SDNPXB"
+    assert properties.conservative_plan(p, {"tilt"}).normals == "tilted"
+    flat = p.replace(d_min=70.0, d_max=70.0, r1_r=1.5, r1_g=1.5, r1_b=1.5, normal_mode="correlated")
+    assert properties.conservative_plan(flat, set()).key == "sdCPxB"
+    assert properties.conservative_plan(flat, {"d_max", "r1_g"}).key == "sdNCXB"
+    bpy.context.scene.frame_set(1)
+    bpy.context.view_layer.update()
+    assert built_plan(mat) == "SDNPXB"  # ks is 0 at frame 1, yet the specular part stays
+
+
+@pytest.mark.slow
+def test_keyframed_thickness_renders_each_frame_like_the_closure_form():
+    [obj], cam, centers = spheres()
+    mat = load_preset(obj, "fig4_parallel")
+    node = shader_node(mat)
+    frames = {1: 120.0, 2: 260.0}
+    for frame, d in frames.items():
+        for name in ("d_min", "d_max"):
+            node.inputs[name].default_value = d
+            node.inputs[name].keyframe_insert("default_value", frame=frame)
+    scene = bpy.context.scene
+    scene.frame_set(1)
+    bpy.context.view_layer.update()
+    key = built_plan(mat)
+    assert key == "SDNPXB"  # animated thickness: the pattern stays although d_min == d_max now
+    pointer = shader_node(mat).as_pointer()
+    means = []
+    for frame, d in frames.items():
+        scene.frame_set(frame)
+        bpy.context.view_layer.update()
+        assert built_plan(mat) == key and shader_node(mat).as_pointer() == pointer
+        passes = S.render_passes()
+        params = preset("fig4_parallel").replace(d_min=d, d_max=d)
+        expected, geo = render_spheres([params], cam, SUN, centers, shading=closure_shading)
+        assert_matches(passes.beauty, expected, geo, 0, f"frame {frame}")
+        mask = lit_mask(geo, SUN.l)
+        means.append(passes.beauty[mask].mean(axis=0))
+    hue = [m / m.sum() for m in means]
+    assert np.abs(hue[0] - hue[1]).max() > 0.05, hue
+
+
+@pytest.mark.slow
+def test_saved_file_renders_the_same_without_the_addon(tmp_path):
+    [obj], _, _ = spheres()
+    load_preset(obj, "oil_slick")
+    before = S.render_passes().beauty
+    path = tmp_path / "layered.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    layered_brdf_addon.unregister()
+    try:
+        bpy.ops.wm.open_mainfile(filepath=str(path))
+        assert not hasattr(bpy.types.Material, properties.SETTINGS)
+        after = S.render_passes().beauty
+    finally:
+        layered_brdf_addon.register()
+    assert np.all(np.isfinite(before)) and before.max() > 0.0
+    np.testing.assert_array_equal(after, before)
+
+
+# --- files holding older or linked data --------------------------------------------------------
+def test_an_older_node_group_in_a_file_is_replaced(tmp_path):
+    obj = plain_object()
+    mat = load_preset(obj, "glazed_clay")
+    group = shader_node(mat).node_tree
+    name = group.name
+    group[node_group_builder.STAMP_KEY] = "1:old"
+    assert bpy.ops.layered_brdf.apply() == {"FINISHED"}
+    group = bpy.data.node_groups[name]
+    assert group[node_group_builder.STAMP_KEY] == node_group_builder.build_stamp()
+    assert shader_node(mat).node_tree == group
+    assert [g.name for g in bpy.data.node_groups if g.name.startswith(name + ".")] == []
+    # Opening a saved file with a stale group updates it too (load_post).
+    group[node_group_builder.STAMP_KEY] = "1:old"
+    path = tmp_path / "old.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    assert bpy.data.node_groups[name][node_group_builder.STAMP_KEY] == node_group_builder.build_stamp()
+
+
+def test_a_linked_material_is_left_untouched_and_the_panel_says_why(tmp_path):
+    obj = plain_object()
+    name = load_preset(obj, "soap_bubble").name
+    lib = tmp_path / "library.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(lib))
+    obj = plain_object()
+    with bpy.data.libraries.load(str(lib), link=True) as (_src, dst):
+        dst.materials = [name]
+    linked = dst.materials[0]
+    assert linked.library is not None
+    obj.data.materials.append(linked)
+    activate(obj)
+    before = socket_values(linked), linked["layered_brdf_build"]
+    with pytest.raises(RuntimeError, match="linked from"):
+        bpy.ops.layered_brdf.apply()
+    with pytest.raises(RuntimeError, match="linked from"):
+        bpy.ops.layered_brdf.load_preset(preset="oil_slick")
+    bpy.context.view_layer.update()
+    assert (socket_values(linked), linked["layered_brdf_build"]) == before
+    assert obj.active_material == linked
+    warnings = labels(draw_panels(obj), alert=True)
+    assert any("linked from" in w and "make it local" in w for w in warnings), warnings
+
+
+# --- user presets and assets -----------------------------------------------------------------
+def test_user_presets_save_reuse_in_another_file_and_delete(user_dir):
+    obj = plain_object()
+    mat = load_preset(obj, "anodised_titanium")
+    shader_node(mat).inputs["d_max"].default_value = 95.0
+    bpy.ops.layered_brdf.save_preset(name="Blue titanium")
+    path = user_dir / "Blue titanium.json"
+    data = json.loads(path.read_text())
+    assert data["params"]["d_max"] == pytest.approx(95.0) and data["name"] == "Blue titanium"
+    assert properties.settings(mat).preset == "user:Blue titanium"
+    saved = socket_values(mat)
+    obj = plain_object()  # another file
+    mat = load_preset(obj, "user:Blue titanium")
+    assert socket_values(mat) == pytest.approx(saved)
+    assert "Blue titanium" in user_presets.user_preset_names()
+    # An invalid preset file: the operator reports the parameter and range, nothing changes.
+    bad = dict(data, params=dict(data["params"], tilt=400.0))
+    (user_dir / "Broken.json").write_text(json.dumps(bad))
+    before = socket_values(mat), mat["layered_brdf_build"]
+    with pytest.raises(RuntimeError, match=r"'tilt' = 400.0 is invalid: allowed a number in \[0, 180\] deg"):
+        bpy.ops.layered_brdf.load_preset(preset="user:Broken")
+    (user_dir / "Garbled.json").write_text("{not json")
+    with pytest.raises(RuntimeError, match="readable preset file"):
+        bpy.ops.layered_brdf.load_preset(preset="user:Garbled")
+    assert (socket_values(mat), mat["layered_brdf_build"]) == before
+    with pytest.raises(RuntimeError, match="'name'"):
+        bpy.ops.layered_brdf.save_preset(name="../escape")
+    with pytest.raises(RuntimeError, match="built-in"):
+        bpy.ops.layered_brdf.save_preset(name="soap_bubble")
+    assert bpy.ops.layered_brdf.delete_preset(preset="Blue titanium") == {"FINISHED"}
+    assert not path.exists()
+    with pytest.raises(RuntimeError, match="one of the saved presets"):
+        bpy.ops.layered_brdf.load_preset(preset="user:Blue titanium")
+    assert user_presets.extension_package() is None  # a checkout: presets live in Blender's config
+
+
+def test_node_group_is_an_asset_with_a_rendered_preview():
+    obj = plain_object()
+    mat = load_preset(obj, "beetle_shell")
+    group = assets.group_of(mat)
+    data = group.asset_data
+    assert data is not None and data.catalog_id == assets.CATALOG_ID
+    plan = properties.desired(mat)[2]
+    assert {t.name for t in data.tags} >= {"Layered BRDF", f"plan {plan.key}"}
+    assert "tilt" in data.description
+    size = tuple(group.preview.image_size)
+    assert size == (assets.PREVIEW_SIZE, assets.PREVIEW_SIZE)
+    px = np.array(group.preview.image_pixels_float[:]).reshape(size[1], size[0], 4)
+    assert px[size[1] // 2, size[0] // 2, 3] > 0.99 and px[0, 0, 3] < 0.01  # a sphere on a clear background
+    assert px[..., :3].max() > 0.2
+    assert [s.name for s in bpy.data.scenes] == ["Scene"]  # the preview scene is gone
+    assert bpy.ops.layered_brdf.mark_asset() == {"FINISHED"}
+
+
+# --- EEVEE -------------------------------------------------------------------------------------
+@pytest.mark.slow
+def test_eevee_renders_the_node_group_with_the_highlight_where_cycles_has_it(tmp_path):
+    out = tmp_path / "eevee.npz"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run([sys.executable, str(ROOT / "tests" / "eevee_check.py"), str(out)], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and out.exists(), (
+        "EEVEE could not render (it needs EGL and Mesa's software GL: see .ci/run):\n" + proc.stderr[-3000:])
+    r = np.load(out)
+    cycles, eevee = r["cycles"], r["eevee"]
+    print(f"EEVEE render: {float(r['eevee_seconds']):.1f} s")
+    assert np.all(np.isfinite(eevee)) and eevee.max() > 0.0
+    lum_c, lum_e = cycles.sum(-1), eevee.sum(-1)
+    peak_c = np.array(np.unravel_index(lum_c.argmax(), lum_c.shape))
+    peak_e = np.array(np.unravel_index(lum_e.argmax(), lum_e.shape))
+    assert np.abs(peak_c - peak_e).max() <= 2, (peak_c, peak_e)
+    # The highlight stands out in both: its peak is several times the sphere's median.
+    sphere = lum_c > 0.0
+    assert lum_e[tuple(peak_e)] > 4.0 * np.median(lum_e[sphere])
