@@ -18,6 +18,9 @@ SHADER_NODE = "Layered BRDF"
 
 def _material_for(target, name):
     if isinstance(target, bpy.types.Material):
+        if target.library is not None:
+            raise ParameterError("target", target.name, "a local material (it is linked from "
+                                 f"{target.library.filepath}); make it local first")
         return target
     obj = target
     if isinstance(target, str):
@@ -36,6 +39,7 @@ def _material_for(target, name):
     if mat is None:
         mat = bpy.data.materials.new(name)
         mat[MATERIAL_KEY] = True
+        mat.node_tree.nodes.clear()  # a new material's default Principled BSDF is not ours to keep
         if obj.data.materials:
             obj.data.materials[obj.active_material_index] = mat
         else:
@@ -65,45 +69,76 @@ def read_inputs(node, base: LayeredParams | None = None) -> LayeredParams:
     return LayeredParams.from_dict(values, base=base or LayeredParams())
 
 
+OWN_PREFIX = "Layered BRDF"  # nodes the add-on creates (and may delete); the artist's are kept
+_SOCKET_ALIASES = {"Base Color": "BaseColor", "Base Shader": "Base", "Lower Normal": "LowerNormal",
+                   "Upper Normal": "UpperNormal"}
+_SOCKET_ALIASES.update({v: k for k, v in list(_SOCKET_ALIASES.items())})
+
+
+def _socket(sockets, name):
+    return sockets.get(name) or sockets.get(_SOCKET_ALIASES.get(name, ""))
+
+
 def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan):
+    """(Re)build the add-on's nodes in ``mat``; the artist's own nodes and their links to the
+    shader node's inputs and outputs are kept."""
     tree = mat.node_tree
-    tree.nodes.clear()
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    out.location = (400, 0)
+    old = tree.nodes.get(SHADER_NODE)
+    keep_in, keep_out = [], []
+    if old is not None:
+        for sock in old.inputs:
+            for link in sock.links:
+                if not link.from_node.name.startswith(OWN_PREFIX):
+                    keep_in.append((link.from_socket, sock.name))
+        for sock in old.outputs:
+            for link in sock.links:
+                if not link.to_node.name.startswith(OWN_PREFIX) and link.to_node.bl_idname != "ShaderNodeOutputMaterial":
+                    keep_out.append((sock.name, link.to_socket))
+    for n in [n for n in tree.nodes if n.name.startswith(OWN_PREFIX)]:
+        tree.nodes.remove(n)
+    out = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.is_active_output), None)
+    if out is None:
+        out = tree.nodes.new("ShaderNodeOutputMaterial")
+        out.location = (400, 0)
     if backend == "nodes":
         group = node_group_builder.ensure_group(plan)
         node = tree.nodes.new("ShaderNodeGroup")
         node.node_tree = group
-        shader_out, d_out, n1_out = node.outputs["BSDF"], node.outputs["Thickness"], node.outputs["Lower Normal"]
-        n0_out = node.outputs["Upper Normal"]
     else:
         node = tree.nodes.new("ShaderNodeScript")
         node.mode = "INTERNAL"
         node.script = osl_backend.text_for(plan)
         osl_backend.compile_script_node(node)
-        shader_out, d_out, n1_out = node.outputs["BSDF"], node.outputs["Thickness"], node.outputs["LowerNormal"]
-        n0_out = node.outputs.get("UpperNormal")
-    base_in = node.inputs.get("Base Shader") or node.inputs.get("Base")
-    if params.base_layer == "transparent" and base_in is not None:
-        tr = tree.nodes.new("ShaderNodeBsdfTransparent")
-        tr.location = (-300, -300)
-        tree.links.new(tr.outputs[0], base_in)
     node.name = node.label = SHADER_NODE
     node.width = 220
+    node.location = (out.location[0] - 300, out.location[1])
+    shader_out = _socket(node.outputs, "BSDF")
     tree.links.new(shader_out, out.inputs["Surface"])
-    aov_d = tree.nodes.new("ShaderNodeOutputAOV")
-    aov_d.aov_name = AOV_THICKNESS
-    aov_d.location = (400, -200)
-    tree.links.new(d_out, aov_d.inputs["Value"])
-    aov_n = tree.nodes.new("ShaderNodeOutputAOV")
-    aov_n.aov_name = AOV_LOWER_NORMAL
-    aov_n.location = (400, -350)
-    tree.links.new(n1_out, aov_n.inputs["Color"])
-    if n0_out is not None:
-        aov_u = tree.nodes.new("ShaderNodeOutputAOV")
-        aov_u.aov_name = AOV_UPPER_NORMAL
-        aov_u.location = (400, -500)
-        tree.links.new(n0_out, aov_u.inputs["Color"])
+    for from_socket, name in keep_in:
+        target = _socket(node.inputs, name)
+        if target is not None:
+            tree.links.new(from_socket, target)
+    for name, to_socket in keep_out:
+        source = _socket(node.outputs, name)
+        if source is not None:
+            tree.links.new(source, to_socket)
+    base_in = _socket(node.inputs, "Base Shader")
+    if params.base_layer == "transparent" and base_in is not None and not base_in.is_linked:
+        tr = tree.nodes.new("ShaderNodeBsdfTransparent")
+        tr.name = tr.label = f"{OWN_PREFIX} base"
+        tr.location = (node.location[0] - 250, node.location[1] - 300)
+        tree.links.new(tr.outputs[0], base_in)
+    for k, (aov_name, socket_name, kind) in enumerate(((AOV_THICKNESS, "Thickness", "Value"),
+                                                       (AOV_LOWER_NORMAL, "Lower Normal", "Color"),
+                                                       (AOV_UPPER_NORMAL, "Upper Normal", "Color"))):
+        src = _socket(node.outputs, socket_name)
+        if src is None:
+            continue
+        aov = tree.nodes.new("ShaderNodeOutputAOV")
+        aov.name = aov.label = f"{OWN_PREFIX} AOV {aov_name}"
+        aov.aov_name = aov_name
+        aov.location = (out.location[0], out.location[1] - 200 - 150 * k)
+        tree.links.new(src, aov.inputs[kind])
     return node
 
 

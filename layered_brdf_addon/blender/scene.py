@@ -50,12 +50,37 @@ def camera_for(n: int, height: int = 64, spacing: float = 2.2, view=(0.0, -1.0, 
     return OrthoCamera(view=view, ortho_scale=spacing * n, width=height * n, height=height)
 
 
+def sphere_arrays(segments: int = SPHERE_SEGMENTS, rings: int = SPHERE_RINGS):
+    """Vertices (V, 3) and quad/triangle faces of a UV sphere of radius 1 (poles on z)."""
+    theta = np.pi * np.arange(1, rings) / rings  # rings - 1 latitude circles
+    phi = 2.0 * np.pi * np.arange(segments) / segments
+    st, ct = np.sin(theta)[:, None], np.cos(theta)[:, None]
+    ring_verts = np.stack([st * np.cos(phi), st * np.sin(phi), ct * np.ones_like(phi)], axis=-1).reshape(-1, 3)
+    verts = np.concatenate([[[0.0, 0.0, 1.0]], ring_verts, [[0.0, 0.0, -1.0]]])
+    top, bottom = 0, len(verts) - 1
+    idx = 1 + np.arange((rings - 1) * segments).reshape(rings - 1, segments)
+    nxt = np.roll(idx, -1, axis=1)
+    quads = np.stack([idx[:-1], idx[1:], nxt[1:], nxt[:-1]], axis=-1).reshape(-1, 4)
+    cap_top = np.stack([np.full(segments, top), idx[0], nxt[0]], axis=-1)
+    cap_bottom = np.stack([idx[-1], np.full(segments, bottom), nxt[-1]], axis=-1)
+    return verts, cap_top, quads, cap_bottom
+
+
 def _sphere_mesh(name: str):
+    """A smooth-shaded UV sphere built from arrays (bmesh's operator is much slower)."""
+    verts, tri_top, quads, tri_bottom = sphere_arrays()
+    loops = np.concatenate([tri_top.ravel(), quads.ravel(), tri_bottom.ravel()])
+    sizes = np.concatenate([np.full(len(tri_top), 3), np.full(len(quads), 4), np.full(len(tri_bottom), 3)])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     mesh = bpy.data.meshes.new(name)
-    bm = bmesh.new()
-    bmesh.ops.create_uvsphere(bm, u_segments=SPHERE_SEGMENTS, v_segments=SPHERE_RINGS, radius=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
+    mesh.vertices.add(len(verts))
+    mesh.vertices.foreach_set("co", verts.astype(np.float32).ravel())
+    mesh.loops.add(len(loops))
+    mesh.loops.foreach_set("vertex_index", loops.astype(np.int32))
+    mesh.polygons.add(len(sizes))
+    mesh.polygons.foreach_set("loop_start", starts.astype(np.int32))
+    mesh.update(calc_edges=True)
+    mesh.validate()
     mesh.shade_smooth()
     return mesh
 
