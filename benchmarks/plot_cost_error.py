@@ -69,7 +69,8 @@ def main():
         ax.plot([pts[k][0] for k in front], [pts[k][1] for k in front], "--", color="tab:orange",
                 label="Pareto front", zorder=2)
         ax.set_xscale("log")
-        ax.set_yscale("log")
+        if ax is axes[0]:
+            ax.set_yscale("log")
         ax.set_xlabel(xlabel)
         ax.set_ylabel("mean CIEDE2000 to 1 nm ground truth")
         ax.set_title(title)
