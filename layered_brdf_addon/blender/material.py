@@ -155,12 +155,9 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     params = (params or LayeredParams()).validate()
     if backend not in BACKENDS:
         raise ParameterError("backend", backend, "one of 'nodes', 'osl'")
-    if params.accuracy != "rgb":
-        # The shading program has a spectral path (model/program.py: shade_spectral) and the
-        # numpy closure form runs it, but Cycles' SVM drops lobes of the node group beyond
-        # 8 wavelengths: the shaders render RGB until that is solved.
-        raise ParameterError("accuracy", params.accuracy, "'rgb' in Blender (spectral modes are evaluated by "
-                             "the numpy reference: benchmarks/accuracy_table.py)")
+    if params.accuracy != "rgb" and backend == "osl":
+        raise ParameterError("accuracy", params.accuracy, "'rgb' with the OSL backend (the spectral modes run in "
+                             "the node group)")
     if backend == "nodes" and params.lobe != "beckmann":
         raise ParameterError("lobe", params.lobe, "'beckmann' with the node backend (phong_ramp exists only in OSL)")
     plan = plan or plan_effects(params)

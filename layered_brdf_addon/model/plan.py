@@ -32,6 +32,8 @@ class EffectPlan:
             "S" if self.specular else "s", "D" if self.diffuse else "d", self.thickness[0].upper(),
             self.normals[0].upper(), "X" if self.dispersion else "x", self.lobe[0].upper(),
         ]
+        if self.spectral:
+            parts.append(f"W{self.spectral}")
         return "".join(parts)
 
     def to_dict(self) -> dict:

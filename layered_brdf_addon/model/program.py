@@ -241,6 +241,7 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
     for x in state:
         size = size + ops.length(x)
     d = ops.maximum(d, d - size)
+    r1 = ops.maximum(r1, r1 - size)  # everything that depends on the index waits too
     if diffuse:
         td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
         rho = ops.maximum(1.0 + ops.cos((4.0 * math.pi / lam) * r1 * d) * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
