@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-from layered_brdf_addon.model import ParameterError, preset
+from layered_brdf_addon.model import preset
 from layered_brdf_addon.model import closures as C
 from layered_brdf_addon.model.spectral import shader_tables
 from layered_brdf_addon.model.spectral_tables import PATH, SAMPLE_COUNTS
@@ -37,9 +37,10 @@ MODES = ("spectral4", "spectral8", "spectral16", "spectral32")
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("backend", ["nodes", "osl"])
 @pytest.mark.parametrize("kd", [0.0, 0.5])
-def test_spectral_node_group_matches_closure_form(kd):
-    """Every spectral mode, dispersive (Fig. 6) and not, in one render per diffuse weight."""
+def test_spectral_shaders_match_closure_form(backend, kd):
+    """Every spectral mode, dispersive (Fig. 6) and not, in one render per backend and diffuse weight."""
     from layered_brdf_addon.model.compare import agreement, lit_mask
 
     from render_helpers import render_row
@@ -47,21 +48,12 @@ def test_spectral_node_group_matches_closure_form(kd):
     cases = [preset("fig6_medium").replace(thickness_mode="height", accuracy=a, kd=kd) for a in MODES]
     cases.append(preset("fig4_parallel").replace(thickness_mode="height", accuracy="spectral16", kd=kd,
                                                  r1_r=1.5, r1_g=1.5, r1_b=1.5))
-    row = render_row(cases, backend="nodes", height=48)
+    if backend == "osl":
+        cases.append(cases[1].replace(lobe="phong"))
+    row = render_row(cases, backend=backend, height=48)
     expected, geo = render_spheres(row.params, row.camera, row.sun, row.centers, shading=C.closure_shading)
     for k, p in enumerate(cases):
         mask = lit_mask(geo, row.sun.l) & (geo.sphere == k)
         ag = agreement(row.passes.beauty, expected, mask, rel_tol=0.02)
-        print(p.accuracy, kd, ag)
+        print(backend, p.accuracy, kd, ag)
         assert ag.failing_fraction <= 0.01, f"{p.accuracy}: {ag}"
-
-
-@pytest.mark.slow
-def test_osl_refuses_spectral_modes_with_a_clear_error():
-    from layered_brdf_addon.blender import scene as S
-    from layered_brdf_addon.blender.material import apply_layered_material
-
-    S.reset_blender()
-    spheres = S.build_scene(S.SceneSpec(osl=True))
-    with pytest.raises(ParameterError, match="'accuracy'"):
-        apply_layered_material(spheres[0], preset("fig4_parallel").replace(accuracy="spectral16"), "osl")

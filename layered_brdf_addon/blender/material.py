@@ -155,9 +155,6 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     params = (params or LayeredParams()).validate()
     if backend not in BACKENDS:
         raise ParameterError("backend", backend, "one of 'nodes', 'osl'")
-    if params.accuracy != "rgb" and backend == "osl":
-        raise ParameterError("accuracy", params.accuracy, "'rgb' with the OSL backend (the spectral modes run in "
-                             "the node group)")
     if backend == "nodes" and params.lobe != "beckmann":
         raise ParameterError("lobe", params.lobe, "'beckmann' with the node backend (phong_ramp exists only in OSL)")
     plan = plan or plan_effects(params)

@@ -8,6 +8,7 @@ from pathlib import Path
 import bpy
 
 from ..model.plan import EffectPlan
+from ..model.spectral_tables import tables
 
 OSL_VERSION = 1
 OSL_PATH = Path(__file__).resolve().parents[2] / "osl" / "layered_brdf.osl"
@@ -25,8 +26,32 @@ def defines(plan: EffectPlan) -> str:
         f"#define LAYERED_NORMALS {NORMAL_CODES[plan.normals]}",
         f"#define LAYERED_DISPERSION {int(plan.dispersion)}",
         f"#define LAYERED_LOBE {1 if plan.lobe == 'phong' else 0}",
+        f"#define LAYERED_SPECTRAL {plan.spectral}",
     ]
+    if plan.spectral:
+        lines += _spectral_defines(plan)
     return "\n".join(lines) + "\n"
+
+
+def _spectral_defines(plan: EffectPlan) -> list[str]:
+    """Baked tables and lobe groups of the spectral variant (as program.shade_spectral)."""
+    from ..model import program
+
+    t = tables(plan.spectral)
+    groups, leads = program.spectral_groups(t["wavelengths"], plan.dispersion)
+    lead = [leads.get(g, -1) for g in range(3)]
+
+    def arr(values, fmt="{:.9g}"):
+        return "{" + ", ".join(fmt.format(v) for v in values) + "}"
+
+    return [
+        f"#define LAYERED_SPECTRAL_3N {3 * plan.spectral}",
+        f"#define LAYERED_SPECTRAL_LAMBDA {arr(t['wavelengths'])}",
+        f"#define LAYERED_SPECTRAL_CAUCHY {arr([x for row in t['cauchy'] for x in row])}",
+        f"#define LAYERED_SPECTRAL_RGB {arr([x for row in t['rgb'] for x in row])}",
+        f"#define LAYERED_SPECTRAL_GROUP {arr(groups, '{:d}')}",
+        f"#define LAYERED_SPECTRAL_LEAD {arr(lead, '{:d}')}",
+    ]
 
 
 def source(plan: EffectPlan) -> str:

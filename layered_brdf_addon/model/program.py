@@ -269,6 +269,17 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
 _UNIT = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
+def spectral_groups(lams, dispersion: bool):
+    """Lobe group of each wavelength (the nearest of the three RGB wavelengths with
+    dispersion, one group without) and, per group, the wavelength whose lobe it uses."""
+    groups = [min(range(3), key=lambda c: abs(WAVELENGTHS_NM[c] - lam)) if dispersion else 0 for lam in lams]
+    leads = {}
+    for g in sorted(set(groups)):
+        centre = WAVELENGTHS_NM[g] if dispersion else WAVELENGTHS_NM[1]
+        leads[g] = min((j for j in range(len(lams)) if groups[j] == g), key=lambda j: abs(lams[j] - centre))
+    return groups, leads
+
+
 def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     """Spectral mode: the channel program at N wavelengths (``r1(lambda)`` from the Cauchy
     fit through the three indices, a linear map), summed into RGB closures with baked
@@ -281,11 +292,7 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
 
     t = tables(plan.spectral)
     lams, K, M = t["wavelengths"], t["cauchy"], t["rgb"]
-    groups = [min(range(3), key=lambda c: abs(WAVELENGTHS_NM[c] - lam)) if plan.dispersion else 0 for lam in lams]
-    leads = {}
-    for g in set(groups):
-        centre = WAVELENGTHS_NM[g] if plan.dispersion else WAVELENGTHS_NM[1]
-        leads[g] = min((j for j in range(len(lams)) if groups[j] == g), key=lambda j: abs(lams[j] - centre))
+    groups, leads = spectral_groups(lams, plan.dispersion)
     zero = (0.0, 0.0, 0.0)
     state = dict(acc_R=zero, acc_D=zero, acc_T0=zero, acc_T1=zero, acc_T2=zero, acc_I0=zero, acc_I1=zero,
                  acc_I2=zero, lead_T0=n0, lead_T1=n0, lead_T2=n0, lead_I0=n0, lead_I1=n0, lead_I2=n0,
