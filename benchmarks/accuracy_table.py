@@ -128,10 +128,10 @@ def stats(de: np.ndarray, rgb_diff: np.ndarray | None = None) -> dict:
     return out
 
 
-def closure_params(r1, tilt: float, lobe: str) -> LayeredParams:
+def closure_params(r1, tilt: float, lobe: str, accuracy: str = "rgb") -> LayeredParams:
     return LayeredParams.from_dict(dict(r1_r=r1[0], r1_g=r1[1], r1_b=r1[2], e0=E0, e1=E1, ks=1.0, kd=0.0, r0=R0,
                                         normal_mode="tilted" if tilt else "parallel", tilt=tilt, lobe=lobe,
-                                        d_min=0.0, d_max=1000.0))
+                                        d_min=0.0, d_max=1000.0, accuracy=accuracy))
 
 
 def closure_rgb(kind: str, r1, sw: dict, l: np.ndarray) -> np.ndarray:
@@ -144,7 +144,8 @@ def closure_rgb(kind: str, r1, sw: dict, l: np.ndarray) -> np.ndarray:
         if kind == "single lobe":
             pix = single_lobe_shading(closure_params(r1, tilt, "phong"), n0, n1, d, ll, o)
         else:
-            pix = closure_shading(closure_params(r1, tilt, kind), n0, n1, d, ll, o, ng=n0)
+            lobe, _, acc = kind.partition(":")
+            pix = closure_shading(closure_params(r1, tilt, lobe, acc or "rgb"), n0, n1, d, ll, o, ng=n0)
         out[sel] = pix / (dot(n0, ll) * norm)[:, None]
     return out
 
@@ -158,7 +159,8 @@ def accuracy(sw: dict) -> dict:
     diff_de = {m: [] for m in mode_map}
     diff_diff = {m: [] for m in mode_map}
     closure_kinds = {"closure form (beckmann)": "beckmann", "closure form (phong)": "phong",
-                     "single lobe": "single lobe"}
+                     "single lobe": "single lobe",
+                     **{f"closure form (beckmann), spectral {n}": f"beckmann:spectral{n}" for n in (4, 8, 16, 32)}}
     clo_de = {k: [] for k in closure_kinds}
     clo_de_rgb = {k: [] for k in closure_kinds}
     clo_tilted = []
@@ -329,7 +331,7 @@ def markdown(res: dict) -> str:
     for k, v in acc["closure_levels"].items():
         g, r = v["vs_ground_truth"], v["vs_rgb_exact"]
         lines.append(f"| {k} | {mp(g['all'])} | {mp(g['tilt_0'])} | {mp(g['tilted'])} | {mp(r['all'])} | "
-                     f"{mp(r['tilt_0'])} | {mp(r['tilted'])} | {tp[k]['specular']:.3g} |")
+                     f"{mp(r['tilt_0'])} | {mp(r['tilted'])} | {tp.get(k, {}).get('specular', float('nan')):.3g} |")
     names = list(acc["modes"])
     lines += ["", "### Mean specular / diffuse CIEDE2000 per index triple", "",
               "| r1 (R/G/B) | " + " | ".join(names) + " |", "| --- |" + " ---: |" * len(names)]

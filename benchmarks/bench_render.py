@@ -74,7 +74,8 @@ def plain_diffuse(obj):
     obj.data.materials.append(mat)
 
 
-def run(presets, size, s1, s2, repeats):
+def run(presets, size, s1, s2, repeats, spectral_preset="fig6_medium",
+        spectral_modes=("rgb", "spectral4", "spectral8", "spectral16", "spectral32")):
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.model import preset
     from layered_brdf_addon.model.plan import EffectPlan, plan_effects
@@ -99,8 +100,22 @@ def run(presets, size, s1, s2, repeats):
                 t = per_sample(S, s1, s2, repeats)
                 rows.append(dict(config=f"{name} {which} [{plan.key}]", preset=name, which=which, backend=backend,
                                  lobe=lobe, plan=plan.key, per_sample=t))
+    # Accuracy modes: RGB and N wavelengths, both backends, the planned shader of one preset.
+    rgb_nodes = None
+    for mode in spectral_modes:
+        for backend in ("nodes", "osl"):
+            p = preset(spectral_preset).replace(accuracy=mode)
+            S, obj = _scene(backend == "osl", size)
+            apply_layered_material(obj, p, backend)
+            t = per_sample(S, s1, s2, repeats)
+            if mode == "rgb" and backend == "nodes":
+                rgb_nodes = t
+            rows.append(dict(config=f"{spectral_preset} {mode}", preset=spectral_preset, which="mode", mode=mode,
+                             backend=backend, lobe="beckmann", plan=plan_effects(p).key, per_sample=t))
     for r in rows:
         r["vs_principled"] = r["per_sample"] / ref
+        if rgb_nodes:
+            r["vs_rgb_nodes"] = r["per_sample"] / rgb_nodes
     return rows
 
 
@@ -119,7 +134,8 @@ def main(argv=None):
     tmp = out.with_suffix(".partial")
     tmp.write_text(json.dumps(dict(size=args.size, samples=args.samples, threads=1, rows=rows), indent=1))
     os.replace(tmp, out)
-    by = {(r.get("preset"), r.get("backend"), r.get("lobe"), r.get("which")): r for r in rows}
+    by = {(r.get("preset"), r.get("backend"), r.get("lobe"), r.get("which")): r for r in rows
+          if r.get("which") != "mode"}
     print(f"{args.size}x{args.size} sphere, 1 thread, cost per sample from {args.samples[0]} and "
           f"{args.samples[1]} samples, best of {args.repeats}; {time.time() - t0:.0f} s in all")
     print("| configuration | backend | ms/sample | vs Principled+Thin Film | saving of planning |")
@@ -130,6 +146,8 @@ def main(argv=None):
             full = by[(r["preset"], r["backend"], r["lobe"], "full")]
             saving = f"{1.0 - r['per_sample'] / full['per_sample']:+.0%}"
         lobe = f" {r['lobe']}" if r.get("lobe") else ""
+        if r.get("which") == "mode":
+            saving = f"{r['vs_rgb_nodes']:.2f}x RGB nodes"
         print(f"| {r['config']} | {r['backend']}{lobe} | {1000 * r['per_sample']:.2f} | "
               f"{r['vs_principled']:.2f}x | {saving} |")
 

@@ -28,10 +28,13 @@ def accuracy_tables() -> str:
 def cost_table() -> str:
     d = json.loads((HERE / "render_cost.json").read_text())
     rows = d["rows"]
-    by = {(r.get("preset"), r.get("backend"), r.get("lobe"), r.get("which")): r for r in rows}
+    by = {(r.get("preset"), r.get("backend"), r.get("lobe"), r.get("which")): r for r in rows
+          if r.get("which") != "mode"}
     out = [f"{d['size']} px sphere, {d.get('threads', 1)} thread, cost per sample from {d['samples'][0]} and "
            f"{d['samples'][1]} samples", "",
            "| configuration | backend | ms / sample | x Principled + Thin Film | planning saves |", "|---|---|---|---|---|"]
+    modes = [r for r in rows if r.get("which") == "mode"]
+    rows = [r for r in rows if r.get("which") != "mode"]
     for r in rows:
         saving = ""
         if r.get("which") == "planned":
@@ -40,6 +43,12 @@ def cost_table() -> str:
         lobe = f" ({r['lobe']})" if r.get("lobe") else ""
         out.append(f"| {r['config']} | {r['backend']}{lobe} | {1000 * r['per_sample']:.2f} | "
                    f"{r['vs_principled']:.1f} | {saving} |")
+    if modes:
+        out += ["", "| accuracy mode | backend | ms / sample | x RGB node group | x Principled + Thin Film |",
+                "|---|---|---|---|---|"]
+        for r in modes:
+            out.append(f"| {r['config']} | {r['backend']} | {1000 * r['per_sample']:.2f} | {r['vs_rgb_nodes']:.2f} | "
+                       f"{r['vs_principled']:.1f} |")
     return "\n".join(out)
 
 
