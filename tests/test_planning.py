@@ -83,3 +83,42 @@ def test_inactive_effects_change_no_pixel(pairs):
 def test_dropping_an_active_effect_changes_the_image(pairs):
     diff = np.abs(pairs[4] - pairs[5])
     assert diff.max() > 0.05 * pairs[4].max()
+
+
+def test_interference_cutoff_constant_matches_its_measurement():
+    from layered_brdf_addon.model import spectral
+    from layered_brdf_addon.model.plan import INTERFERENCE_CUTOFF_OPTICAL_NM
+
+    assert spectral.interference_cutoff_optical_nm(1.0) == pytest.approx(INTERFERENCE_CUTOFF_OPTICAL_NM, rel=0.01)
+
+
+def test_thick_spectral_layers_drop_interference_thin_and_rgb_keep_it():
+    thick = preset("soap_bubble").replace(d_min=6000.0, d_max=9000.0)
+    assert plan_effects(thick.replace(accuracy="spectral32")).interference is False
+    assert plan_effects(thick).interference is True  # RGB: three wavelengths never average out
+    assert plan_effects(preset("soap_bubble").replace(accuracy="spectral32")).interference is True
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("backend", ["nodes", "osl"])
+def test_dropping_averaged_interference_changes_little_and_matches_closure_form(backend):
+    """Past the cut-off the band-averaged image without the interference term stays within
+    a few per cent of the full spectral shader (the cut-off is 1 CIEDE2000 on colour)."""
+    from layered_brdf_addon.model import closures as C
+    from layered_brdf_addon.model import render_spheres
+    from layered_brdf_addon.model.compare import agreement, lit_mask
+
+    p = preset("glazed_clay").replace(thickness_mode="height", d_min=9000.0, d_max=9500.0, accuracy="spectral32",
+                                      r1_r=1.5, r1_g=1.5, r1_b=1.5, e0=20.0, e1=20.0)
+    planned = plan_effects(p)
+    assert planned.interference is False
+    full = EffectPlan(**{**planned.to_dict(), "interference": True})
+    row = render_row([p, p], backend=backend, plans=[planned, full], height=48)
+    expected, geo = render_spheres([p], row.camera, row.sun, row.centers[:1], shading=C.closure_shading)
+    mask = lit_mask(geo, row.sun.l) & (geo.sphere == 0)
+    ag = agreement(row.passes.beauty, expected, mask, rel_tol=0.02)
+    assert ag.failing_fraction <= 0.01, str(ag)
+    w = row.camera.height
+    a, b = row.passes.beauty[:, :w], row.passes.beauty[:, w:2 * w]
+    sel = mask[:, :w]
+    assert np.abs(a[sel].mean(0) - b[sel].mean(0)).max() <= 0.03 * b[sel].mean(0).max()

@@ -27,6 +27,7 @@ def defines(plan: EffectPlan) -> str:
         f"#define LAYERED_DISPERSION {int(plan.dispersion)}",
         f"#define LAYERED_LOBE {1 if plan.lobe == 'phong' else 0}",
         f"#define LAYERED_SPECTRAL {plan.spectral}",
+        f"#define LAYERED_INTERFERENCE {int(plan.interference)}",
     ]
     if plan.spectral:
         lines += _spectral_defines(plan)

@@ -148,7 +148,7 @@ def fold_interference(ops, AR, AT, AI, eR, eT, eI, cR, cT, cI):
 
 
 # ---------------------------------------------------------------- the program
-def channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v):
+def channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v, interference=True):
     """Amplitudes, centres and exponents of one channel's three lobes."""
     e0, e1, ks, r0 = P["e0"], P["e1"], P["ks"], P["r0"]
     f = fresnel_f0(r1, r0)
@@ -187,8 +187,11 @@ def channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v):
     atten = ops.exp(-(e0 * e1p) / (4.0 * w_sum) * angle2(ops, r_v, l_star))
     cos_ci = ops.clamp(ops.dot(c_I, n0), 0.0, 1.0)
     s_i = ops.sqrt(1.0 - eta * eta * (1.0 - cos_ci * cos_ci))
-    phase = (math.pi / lam) * r1 * d * (s_i + s_o)
-    AI = ops.select(through, 2.0 * ops.cos(2.0 * phase) * ops.sqrt(AR_amp * AT_amp) * atten * cos_ci, 0.0)
+    if interference:
+        phase = (math.pi / lam) * r1 * d * (s_i + s_o)
+        AI = ops.select(through, 2.0 * ops.cos(2.0 * phase) * ops.sqrt(AR_amp * AT_amp) * atten * cos_ci, 0.0)
+    else:
+        AI = 0.0  # averaged over the band: cos(2 Phi) has mean 0
     return dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), l_star=l_star, c_I=c_I)
 
 
@@ -203,13 +206,13 @@ def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
     return tuple(out)
 
 
-def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann"):
+def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True):
     """One channel: its lobes (eqs. 3-11), the fold, and the weights of its transmitted and
     interference closures.  A node backend builds it once as a sub-group used per channel."""
     P = dict(e0=e0, e1=e1, ks=ks, r0=r0)
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     r_v = n0 * (2.0 * ops.dot(v, n0)) - v
-    t = channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v)
+    t = channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v, interference)
     AR, AT, AI = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], r_v, t["l_star"], t["c_I"])
     out = dict(AR=AR)
     for tag, amp, centre, e in (("T", AT, t["l_star"], t["eT"]), ("I", AI, t["c_I"], t["eI"])):
@@ -221,7 +224,7 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann"):
 def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc_I2,
                   lead_T0, lead_T1, lead_T2, lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI,
                   r1, lam, m, in0, in1, in2, is0, is1, is2, e0, e1, ks, kd, r0, n0, n1, v, d,
-                  lobe="beckmann", diffuse=True):
+                  lobe="beckmann", diffuse=True, interference=True):
     """One wavelength of the spectral mode, chained: it takes the running sums and returns
     them updated, so a shader holds only the sums, whatever the number of wavelengths.
 
@@ -242,13 +245,15 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
         size = size + ops.length(x)
     d = ops.maximum(d, d - size)
     r1 = ops.maximum(r1, r1 - size)  # everything that depends on the index waits too
-    if diffuse:
+    if diffuse and not interference:
+        out["acc_D"] = acc_D + m  # rho_d averaged over the band: 1
+    elif diffuse:
         td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
         rho = ops.maximum(1.0 + ops.cos((4.0 * math.pi / lam) * r1 * d) * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
         out["acc_D"] = acc_D + m * rho
     else:
         out["acc_D"] = acc_D
-    b = channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe)
+    b = channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe, interference)
     out["acc_R"] = acc_R + m * b["AR"]
     for tag, accs, leads, e_lead, a_lead in (("T", (acc_T0, acc_T1, acc_T2), (lead_T0, lead_T1, lead_T2),
                                              lead_eT, lead_aT),
@@ -306,7 +311,7 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
                               in0=member[0], in1=member[1], in2=member[2],
                               is0=is_lead[0], is1=is_lead[1], is2=is_lead[2],
                               e0=P["e0"], e1=P["e1"], ks=P["ks"], kd=P["kd"], r0=P["r0"], n0=n0, n1=n1, v=v, d=d),
-                         lobe=plan.lobe, diffuse=plan.diffuse)
+                         lobe=plan.lobe, diffuse=plan.diffuse, interference=plan.interference)
     res = ShadingResult()
 
     def rgb(vec):
