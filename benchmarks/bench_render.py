@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from report import cost_table  # benchmarks/ is on sys.path when the script runs
+
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
@@ -134,23 +136,8 @@ def main(argv=None):
     tmp = out.with_suffix(".partial")
     tmp.write_text(json.dumps(dict(size=args.size, samples=args.samples, threads=1, rows=rows), indent=1))
     os.replace(tmp, out)
-    by = {(r.get("preset"), r.get("backend"), r.get("lobe"), r.get("which")): r for r in rows
-          if r.get("which") != "mode"}
-    print(f"{args.size}x{args.size} sphere, 1 thread, cost per sample from {args.samples[0]} and "
-          f"{args.samples[1]} samples, best of {args.repeats}; {time.time() - t0:.0f} s in all")
-    print("| configuration | backend | ms/sample | vs Principled+Thin Film | saving of planning |")
-    print("|---|---|---|---|---|")
-    for r in rows:
-        saving = ""
-        if r.get("which") == "planned":
-            full = by[(r["preset"], r["backend"], r["lobe"], "full")]
-            saving = f"{1.0 - r['per_sample'] / full['per_sample']:+.0%}"
-        lobe = f" {r['lobe']}" if r.get("lobe") else ""
-        if r.get("which") == "mode":
-            saving = f"{r['vs_rgb_nodes']:.2f}x RGB nodes"
-        print(f"| {r['config']} | {r['backend']}{lobe} | {1000 * r['per_sample']:.2f} | "
-              f"{r['vs_principled']:.2f}x | {saving} |")
-
+    print(f"best of {args.repeats}; {time.time() - t0:.0f} s in all")
+    print(cost_table())
 
 if __name__ == "__main__":
     main()

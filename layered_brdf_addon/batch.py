@@ -179,6 +179,24 @@ def parse_sun(value: Any) -> tuple[float, float, float]:
     return xyz  # type: ignore[return-value]
 
 
+def _read_table_file(path: str | os.PathLike, name: str, allowed: str) -> Any:
+    """The contents of a ``.toml`` or ``.json`` file; :class:`ParameterError` naming ``name``
+    (with ``allowed``) if it cannot be read or parsed."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise ParameterError(name, str(p), f"{allowed} ({e.__class__.__name__}: {e})") from None
+    try:
+        if p.suffix.lower() == ".toml":
+            return tomllib.loads(text)
+        if p.suffix.lower() == ".json":
+            return json.loads(text)
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as e:
+        raise ParameterError(name, str(p), f"{allowed} ({e})") from None
+    raise ParameterError(name, str(p), allowed)
+
+
 def load_params_file(path: str | os.PathLike) -> dict[str, Any]:
     """Parameter values from a ``.json`` or ``.toml`` file.
 
@@ -187,19 +205,7 @@ def load_params_file(path: str | os.PathLike) -> dict[str, Any]:
     """
     p = Path(path)
     allowed = "a readable .json or .toml file of parameter values"
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise ParameterError("params", str(p), f"{allowed} ({e.__class__.__name__}: {e})") from None
-    try:
-        if p.suffix.lower() == ".toml":
-            data = tomllib.loads(text)
-        elif p.suffix.lower() == ".json":
-            data = json.loads(text)
-        else:
-            raise ParameterError("params", str(p), allowed)
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as e:
-        raise ParameterError("params", str(p), f"{allowed} ({e})") from None
+    data = _read_table_file(p, "params", allowed)
     if isinstance(data, dict) and isinstance(data.get("params"), dict):
         data = data["params"]
     if not isinstance(data, dict):
@@ -322,19 +328,6 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
 
 # ---------------------------------------------------------------------------
 # rendering in this process (imports bpy)
-def _ensure_passes(scene) -> None:
-    """The normal pass and the material's AOVs on the scene's first view layer."""
-    from .blender.material import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL
-
-    vl = scene.view_layers[0]
-    vl.use_pass_normal = True
-    names = {a.name for a in vl.aovs}
-    for aov_name, kind in ((AOV_THICKNESS, "VALUE"), (AOV_LOWER_NORMAL, "COLOR"), (AOV_UPPER_NORMAL, "COLOR")):
-        if aov_name not in names:
-            aov = vl.aovs.add()
-            aov.name, aov.type = aov_name, kind
-
-
 def _open_blend(req: RenderRequest):
     """Open the request's .blend; return (scene, target object)."""
     import bpy
@@ -368,7 +361,9 @@ def _open_blend(req: RenderRequest):
     if req.backend == "osl":
         c.device = "CPU"
         c.shading_system = True
-    _ensure_passes(scene)
+    from .blender.scene import ensure_passes
+
+    ensure_passes(scene)
     return scene, obj
 
 
@@ -575,19 +570,7 @@ def load_job_file(path: str | os.PathLike, output_dir: str | os.PathLike | None 
     """
     p = Path(path)
     allowed = "a readable .toml or .json job file with a list of jobs ([[job]] tables)"
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise ParameterError("jobfile", str(p), f"{allowed} ({e.__class__.__name__}: {e})") from None
-    try:
-        if p.suffix.lower() == ".toml":
-            data: Any = tomllib.loads(text)
-        elif p.suffix.lower() == ".json":
-            data = json.loads(text)
-        else:
-            raise ParameterError("jobfile", str(p), allowed)
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as e:
-        raise ParameterError("jobfile", str(p), f"{allowed} ({e})") from None
+    data: Any = _read_table_file(p, "jobfile", allowed)
     defaults: Any = {}
     if isinstance(data, dict):
         extra = set(data) - {"defaults", "job", "jobs"}

@@ -139,14 +139,9 @@ def build_into(group, plan) -> None:
 
     d = d_min if plan.thickness == "constant" else thickness_at(p_obj)
 
-    def object_axis(axis):
-        n, dd = ops.node("ShaderNodeVectorTransform", {"Vector": axis}, vector_type="VECTOR",
-                         convert_from="OBJECT", convert_to="WORLD", depth=0)
-        return ops.out(n, dd, 0, "vector")
-
     if plan.normals == "tilted":
-        z_obj = ops.normalize(object_axis((0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
-        x_obj = ops.normalize(object_axis((1.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
+        z_obj = ops.normalize(object_to_world(ops, (0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
+        x_obj = ops.normalize(object_to_world(ops, (1.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
         c = ops.cross(z_obj, n0)
         t = ops.select_vec(ops.lt(ops.length(c), 1e-4), x_obj, ops.vmath("NORMALIZE", c))
         t = rotate_about(ops, t, n0, P["tilt_azimuth"] * (math.pi / 180.0))
@@ -158,8 +153,8 @@ def build_into(group, plan) -> None:
         comb, dd = ops.node("ShaderNodeCombineXYZ", {"X": parts[0], "Y": parts[1], "Z": parts[2]})
         g_obj = ops.out(comb, dd, 0, "vector")
         # A gradient is a covector: for rotation and uniform scale s, M^-T g = M g / s^2.
-        g_vec = object_axis_of(ops, g_obj)
-        sx = object_axis((1.0, 0.0, 0.0))
+        g_vec = object_to_world(ops, g_obj)
+        sx = object_to_world(ops, (1.0, 0.0, 0.0))
         g = g_vec / ops.maximum(ops.dot(sx, sx), 1e-12)
         g_t = g - n0 * ops.dot(g, n0)
         n1 = ops.normalize(n0 + g_t * P["bump_strength"], n0)
@@ -215,7 +210,8 @@ def build_into(group, plan) -> None:
     group["layered_brdf_node_count"] = ops.count
 
 
-def object_axis_of(ops, vec_expr):
-    n, dd = ops.node("ShaderNodeVectorTransform", {"Vector": vec_expr}, vector_type="VECTOR",
+def object_to_world(ops, vec):
+    """A direction (constant or computed) from object to world space (Vector Transform)."""
+    n, dd = ops.node("ShaderNodeVectorTransform", {"Vector": vec}, vector_type="VECTOR",
                      convert_from="OBJECT", convert_to="WORLD")
     return ops.out(n, dd, 0, "vector")

@@ -9,7 +9,7 @@ from layered_brdf_addon.model import closures as C
 from layered_brdf_addon.model.geometry import dot
 from layered_brdf_addon.model.lighting import environment_shading
 from layered_brdf_addon.model.plan import plan_effects
-from layered_brdf_addon.model.sphere import sphere_geometry, thickness_field
+from layered_brdf_addon.model.sphere import lower_normal, sphere_geometry, thickness_field
 
 pytestmark = pytest.mark.slow
 
@@ -44,8 +44,6 @@ def test_white_furnace_albedo_matches_closure_form(furnace, name):
     geo, idx = _pixels(furnace, k)
     n0 = geo.n0[idx[:, 0], idx[:, 1]]
     d = thickness_field(p)(geo.p_object[idx[:, 0], idx[:, 1]])
-    n1 = C.ops_numpy.vec(n0)
-    from layered_brdf_addon.model.sphere import lower_normal
     n1 = lower_normal(p, n0, geo.p_object[idx[:, 0], idx[:, 1]], thickness_field(p))
     def shading(params, n0_, n1_, d_, l, v):
         res = C.shade_closures(params, n0_, n1_, d_, v, plan_effects(params))

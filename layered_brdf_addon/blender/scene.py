@@ -153,6 +153,12 @@ def build_scene(spec: SceneSpec, scene=None):
     scene.view_settings.look = "None"
     scene.view_settings.exposure = 0.0
     scene.view_settings.gamma = 1.0
+    ensure_passes(scene)
+    return spheres
+
+
+def ensure_passes(scene) -> None:
+    """The normal pass and the material's AOVs on the scene's first view layer."""
     vl = scene.view_layers[0]
     vl.use_pass_normal = True
     names = {a.name for a in vl.aovs}
@@ -160,7 +166,6 @@ def build_scene(spec: SceneSpec, scene=None):
         if name not in names:
             aov = vl.aovs.add()
             aov.name, aov.type = name, kind
-    return spheres
 
 
 @dataclass

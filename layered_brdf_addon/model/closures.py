@@ -32,8 +32,6 @@ turned into a closure weight by dividing by that closure's own value there
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from . import ops_numpy, program
@@ -47,21 +45,6 @@ INV_2PI = 0.5 / np.pi
 
 # --------------------------------------------------------------------------
 # Lobe conversions and Cycles' own closure evaluations (Blender 5.0 kernel).
-def phong_to_alpha(e, cos_nv=1.0):
-    """Beckmann ``alpha`` for a reflection-vector Phong exponent: ``sqrt(2 / (4 e + 2))`` (SPEC).
-
-    With ``cos_nv`` < 1 it is widened by ``1 / sqrt(cos_nv)``: a half-vector lobe seen at
-    incidence ``theta`` covers ``cos theta`` times the solid angle of the Phong lobe it
-    stands for, so this keeps the lobe's energy.
-    """
-    return np.sqrt(2.0 / ((4.0 * np.maximum(e, 0.0) + 2.0) * np.clip(cos_nv, 0.05, 1.0)))
-
-
-def alpha_to_roughness(alpha):
-    """The Glossy BSDF node's Roughness socket is ``sqrt(alpha)``."""
-    return np.sqrt(alpha)
-
-
 def beckmann_lambda(alpha2, cos_n):
     """Smith Lambda of Beckmann, Cycles' rational approximation."""
     cos2 = np.maximum(cos_n * cos_n, 1e-30)
@@ -83,13 +66,6 @@ def beckmann_eval(N, v, l, alpha):
     D = np.where(np.isfinite(D), D, 0.0)
     val = D / (4.0 * np.maximum(cos_nv, 1e-30) * (1.0 + beckmann_lambda(alpha2, cos_nv) + beckmann_lambda(alpha2, cos_nl)))
     return np.where((cos_nv > 0.0) & (cos_nl >= 0.0), val, 0.0)
-
-
-def beckmann_peak(cos_nv, alpha):
-    """Value of :func:`beckmann_eval` at the mirror direction of ``v``."""
-    alpha2 = alpha * alpha
-    mu = np.maximum(cos_nv, 1e-30)
-    return 1.0 / (np.pi * alpha2 * 4.0 * mu * (1.0 + 2.0 * beckmann_lambda(alpha2, mu)))
 
 
 def phong_ramp_eval(N, v, l, e):

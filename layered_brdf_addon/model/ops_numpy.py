@@ -1,6 +1,8 @@
 """numpy backend of the shading program: scalars (...), vectors (..., 3)."""
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 
@@ -129,7 +131,7 @@ def vec(a):
 def call(name, fn, inputs, **static):
     """Run a sub-program (a node backend turns it into a sub-group)."""
     args = {k: vec(v) if isinstance(v, tuple) and len(v) == 3 else v for k, v in inputs.items()}
-    return fn(__import__(__name__, fromlist=["_"]), **args, **static)
+    return fn(sys.modules[__name__], **args, **static)
 
 
 def combine(x, y, z):

@@ -195,15 +195,16 @@ def channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v, interference=True):
     return dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), l_star=l_star, c_I=c_I)
 
 
+def diffuse_rho(ops, r1, r0, lam, d):
+    """Eqs. 15 and 18: ``1 + 2 cos(4 pi r1 d / lambda) sqrt(Td (1 - Td))``."""
+    td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
+    return ops.maximum(1.0 + ops.cos((4.0 * math.pi / lam) * r1 * d) * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
+
+
 def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
-    """``kd base rho_d`` per channel, eqs. 15 and 18."""
-    out = []
-    r0 = P["r0"]
-    for r1, lam, base in zip(P["r1"], wavelengths, P["base"]):
-        td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
-        rho = 1.0 + ops.cos((4.0 * math.pi / lam) * r1 * d) * (2.0 * ops.sqrt(td * (1.0 - td)))
-        out.append(P["kd"] * base * ops.maximum(rho, 0.0))
-    return tuple(out)
+    """``kd base rho_d`` per channel."""
+    return tuple(P["kd"] * base * diffuse_rho(ops, r1, P["r0"], lam, d)
+                 for r1, lam, base in zip(P["r1"], wavelengths, P["base"]))
 
 
 def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True):
@@ -248,9 +249,7 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
     if diffuse and not interference:
         out["acc_D"] = acc_D + m  # rho_d averaged over the band: 1
     elif diffuse:
-        td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
-        rho = ops.maximum(1.0 + ops.cos((4.0 * math.pi / lam) * r1 * d) * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
-        out["acc_D"] = acc_D + m * rho
+        out["acc_D"] = acc_D + m * diffuse_rho(ops, r1, r0, lam, d)
     else:
         out["acc_D"] = acc_D
     b = channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe, interference)
