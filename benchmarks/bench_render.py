@@ -80,7 +80,8 @@ def run(presets, size, s1, s2, repeats, spectral_preset="fig6_medium",
         spectral_modes=("rgb", "spectral4", "spectral8", "spectral16", "spectral32")):
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.model import preset
-    from layered_brdf_addon.model.plan import EffectPlan, plan_effects
+    from layered_brdf_addon.model.plan import EffectPlan
+    from layered_brdf_addon.model.policy import plan_effects
 
     rows = []
     S, obj = _scene(False, size)

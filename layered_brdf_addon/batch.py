@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from .model.params import PARAM_SPECS, LayeredParams, ParameterError
-from .model.plan import plan_effects
+from .model.policy import plan_effects
 from .model.presets import PRESETS, preset
 from .outputs import (OutputPaths, camera_to_dict, output_stem, remove_stale_temps, sun_to_dict)
 

@@ -16,7 +16,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .model.params import LayeredParams, ParameterError
-from .model.plan import plan_effects
+from .model.policy import plan_effects
 from .model.presets import PAPER_PRESETS, preset
 from .outputs import OutputPaths, camera_to_dict, output_stem, sun_to_dict
 

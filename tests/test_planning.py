@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.model import PRESETS, preset
-from layered_brdf_addon.model.plan import EffectPlan, plan_effects
+from layered_brdf_addon.model.plan import EffectPlan
+from layered_brdf_addon.model.policy import plan_effects
 
 from render_helpers import render_row
 
@@ -87,7 +88,7 @@ def test_dropping_an_active_effect_changes_the_image(pairs):
 
 def test_interference_cutoff_constant_matches_its_measurement():
     from layered_brdf_addon.model import spectral
-    from layered_brdf_addon.model.plan import INTERFERENCE_CUTOFF_OPTICAL_NM
+    from layered_brdf_addon.model.policy import INTERFERENCE_CUTOFF_OPTICAL_NM
 
     assert spectral.interference_cutoff_optical_nm(1.0) == pytest.approx(INTERFERENCE_CUTOFF_OPTICAL_NM, rel=0.01)
 

@@ -20,11 +20,13 @@ import pytest
 import layered_brdf_addon
 from layered_brdf_addon.blender import assets, osl, properties, registration, ui, user_presets
 from layered_brdf_addon.blender import scene as S
+from layered_brdf_addon.blender import material as M
 from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.model import LayeredParams, preset, render_spheres
 from layered_brdf_addon.model.closures import closure_shading
 from layered_brdf_addon.model.compare import agreement, lit_mask
 from layered_brdf_addon.model.params import PARAM_SPECS, iter_sockets
+from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model.presets import PRESETS
 from layered_brdf_addon.model.sphere import Sun
 from node_groups import layered as node_group_builder
@@ -242,7 +244,7 @@ def test_osl_backend_warns_when_the_scene_cannot_run_it():
     properties.settings(mat).backend = "nodes"
     assert shader_node(mat).bl_idname == "ShaderNodeScript"
     assert "lobe" in properties.material_problem(mat)
-    assert any("'beckmann' with the node-group backend" in w for w in labels(draw_panels(obj), alert=True))
+    assert any("'beckmann' with the nodes backend" in w for w in labels(draw_panels(obj), alert=True))
     with pytest.raises(RuntimeError, match="lobe"):
         bpy.ops.layered_brdf.apply()
     properties.settings(mat).lobe = "beckmann"
@@ -337,14 +339,14 @@ def test_animated_driven_or_linked_sockets_keep_their_effects():
     node.inputs["bump_strength"].driver_add("default_value")
     value = mat.node_tree.nodes.new("ShaderNodeValue")
     mat.node_tree.links.new(value.outputs[0], node.inputs["kd"])
-    assert properties.animated_parameters(mat) == {"ks", "bump_strength", "kd"}
+    assert M.animated_parameters(mat) == {"ks", "bump_strength", "kd"}
     p = preset("fig4_parallel").replace(ks=0.0, kd=0.0, tilt=0.0, normal_mode="tilted")
-    assert properties.conservative_plan(p, set()).key == "sdNPXB"
-    assert properties.conservative_plan(p, {"ks", "kd"}).key == "SDNPXB"
-    assert properties.conservative_plan(p, {"tilt"}).normals == "tilted"
+    assert plan_effects(p, set()).key == "sdNPXB"
+    assert plan_effects(p, {"ks", "kd"}).key == "SDNPXB"
+    assert plan_effects(p, {"tilt"}).normals == "tilted"
     flat = p.replace(d_min=70.0, d_max=70.0, r1_r=1.5, r1_g=1.5, r1_b=1.5, normal_mode="correlated")
-    assert properties.conservative_plan(flat, set()).key == "sdCPxB"
-    assert properties.conservative_plan(flat, {"d_max", "r1_g"}).key == "sdNCXB"
+    assert plan_effects(flat, set()).key == "sdCPxB"
+    assert plan_effects(flat, {"d_max", "r1_g"}).key == "sdNCXB"
     bpy.context.scene.frame_set(1)
     bpy.context.view_layer.update()
     assert built_plan(mat) == "SDNPXB"  # ks is 0 at frame 1, yet the specular part stays

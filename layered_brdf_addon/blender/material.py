@@ -1,15 +1,18 @@
 """apply_layered_material: the one function the UI, the CLI and the tests call."""
 from __future__ import annotations
 
+import re
+
 import bpy
 
 from ..model.params import ParameterError, LayeredParams, iter_sockets
-from ..model.plan import EffectPlan, plan_effects
+from ..model.plan import EffectPlan
+from ..model import policy
+from ..model.policy import plan_effects
 from . import osl as osl_backend
 from ._deps import node_group_builder
 
 MATERIAL_KEY = "layered_brdf"  # custom property marking materials made by the add-on
-BACKENDS = ("nodes", "osl")
 AOV_THICKNESS = "layer_thickness"
 AOV_LOWER_NORMAL = "lower_normal"
 AOV_UPPER_NORMAL = "upper_normal"  # Cycles' Normal pass averages closure normals: not n0 here
@@ -142,6 +145,58 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan):
     return node
 
 
+_SOCKET_PATH = re.compile(r'nodes\["(?P<node>(?:[^"\\]|\\.)*)"\]\.inputs\[(?P<index>\d+|"(?:[^"\\]|\\.)*")\]'
+                          r'\.default_value')
+
+
+def _action_paths(action):
+    if action is None:
+        return
+    for layer in action.layers:
+        for strip in layer.strips:
+            for bag in strip.channelbags:
+                for fc in bag.fcurves:
+                    yield fc.data_path
+
+
+def _animated_paths(owner):
+    ad = owner.animation_data
+    if ad is None:
+        return
+    yield from _action_paths(ad.action)
+    for track in ad.nla_tracks:
+        for strip in track.strips:
+            yield from _action_paths(strip.action)
+    for fc in ad.drivers:
+        yield fc.data_path
+
+
+def animated_parameters(mat) -> set[str]:
+    """Shader inputs whose value varies: keyframed, driven, or fed by a link."""
+    node = shader_node(mat)
+    if node is None:
+        return set()
+    names = {s.name for s in iter_sockets() if node.inputs[s.name].is_linked}
+    prefixes = ((mat.node_tree, ""), (mat, "node_tree."))
+    for owner, prefix in prefixes:
+        for path in _animated_paths(owner):
+            if not path.startswith(prefix):
+                continue
+            m = _SOCKET_PATH.fullmatch(path[len(prefix):])
+            if m is None or m.group("node") != node.name:
+                continue
+            index = m.group("index")
+            if index.isdigit():
+                i = int(index)
+                if i < len(node.inputs):
+                    names.add(node.inputs[i].name)
+            else:
+                key = index[1:-1]
+                sock = node.inputs.get(key)
+                names.add(sock.name if sock is not None else key)
+    return names & {s.name for s in iter_sockets()}
+
+
 def apply_layered_material(target, params: LayeredParams | None = None, backend: str = "nodes",
                            plan: EffectPlan | None = None, name: str = "Layered BRDF"):
     """Give ``target`` (an object, its name, or a material) the layered material.
@@ -153,14 +208,11 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     the always-full shader).  Returns the material.
     """
     params = (params or LayeredParams()).validate()
-    if backend not in BACKENDS:
-        raise ParameterError("backend", backend, "one of 'nodes', 'osl'")
-    if backend == "nodes" and params.lobe != "beckmann":
-        raise ParameterError("lobe", params.lobe, "'beckmann' with the node backend (phong_ramp exists only in OSL)")
-    plan = plan or plan_effects(params)
+    policy.check_backend(backend, params.lobe)
+    mat = _material_for(target, name)
+    plan = plan or plan_effects(params, animated_parameters(mat))
     if plan.lobe != params.lobe:
         plan = EffectPlan(**{**plan.to_dict(), "lobe": params.lobe})
-    mat = _material_for(target, name)
     node = shader_node(mat)
     key = f"{backend}:{plan.key}:{params.base_layer}"
     if node is None or mat.get("layered_brdf_build") != key or not _node_current(node, backend, plan):

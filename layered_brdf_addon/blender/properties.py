@@ -18,7 +18,9 @@ from bpy.app.handlers import persistent
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
 from ..model.params import PARAM_SPECS, LayeredParams, ParameterError, ParamSpec, iter_sockets
-from ..model.plan import EffectPlan, plan_effects
+from ..model.plan import EffectPlan
+from ..model import policy
+from ..model.policy import plan_effects
 from . import assets
 from . import material as M
 from . import osl as osl_backend
@@ -36,10 +38,6 @@ BACKEND_ITEMS = (
 )
 
 # The effect each animatable parameter switches on or off (see model/plan.py).
-EFFECT_OF = {"ks": "specular", "kd": "diffuse", "d_min": "thickness", "d_max": "thickness",
-             "tilt": "normals", "bump_strength": "normals", "r1_r": "dispersion", "r1_g": "dispersion",
-             "r1_b": "dispersion"}
-
 _suspended = 0
 
 
@@ -161,87 +159,7 @@ def params_of(mat) -> LayeredParams:
 
 
 def check_backend(params: LayeredParams, backend: str) -> None:
-    if backend == "nodes" and params.lobe != "beckmann":
-        raise ParameterError("lobe", params.lobe, "'beckmann' with the node-group backend "
-                             "(choose the OSL backend for 'phong')")
-
-
-_SOCKET_PATH = re.compile(r'nodes\["(?P<node>(?:[^"\\]|\\.)*)"\]\.inputs\[(?P<index>\d+|"(?:[^"\\]|\\.)*")\]'
-                          r'\.default_value')
-
-
-def _action_paths(action):
-    if action is None:
-        return
-    for layer in action.layers:
-        for strip in layer.strips:
-            for bag in strip.channelbags:
-                for fc in bag.fcurves:
-                    yield fc.data_path
-
-
-def _animated_paths(owner):
-    ad = owner.animation_data
-    if ad is None:
-        return
-    yield from _action_paths(ad.action)
-    for track in ad.nla_tracks:
-        for strip in track.strips:
-            yield from _action_paths(strip.action)
-    for fc in ad.drivers:
-        yield fc.data_path
-
-
-def animated_parameters(mat) -> set[str]:
-    """Shader inputs whose value varies: keyframed, driven, or fed by a link."""
-    node = M.shader_node(mat)
-    if node is None:
-        return set()
-    names = {s.name for s in iter_sockets() if node.inputs[s.name].is_linked}
-    prefixes = ((mat.node_tree, ""), (mat, "node_tree."))
-    for owner, prefix in prefixes:
-        for path in _animated_paths(owner):
-            if not path.startswith(prefix):
-                continue
-            m = _SOCKET_PATH.fullmatch(path[len(prefix):])
-            if m is None or m.group("node") != node.name:
-                continue
-            index = m.group("index")
-            if index.isdigit():
-                i = int(index)
-                if i < len(node.inputs):
-                    names.add(node.inputs[i].name)
-            else:
-                key = index[1:-1]
-                sock = node.inputs.get(key)
-                names.add(sock.name if sock is not None else key)
-    return names & {s.name for s in iter_sockets()}
-
-
-def conservative_plan(params: LayeredParams, animated: set[str]) -> EffectPlan:
-    """The effect plan for every value the ``animated`` parameters may take.
-
-    An animated parameter counts as making its effect active: animated ``ks``/``kd`` keep
-    their part, animated ``d_min``/``d_max`` keep the thickness pattern, animated ``tilt``
-    or ``bump_strength`` keep the lower normal, an animated index keeps dispersion.
-    """
-    plan = plan_effects(params)
-    touched = {EFFECT_OF[n] for n in animated if n in EFFECT_OF}
-    if not touched:
-        return plan
-    fields = plan.to_dict()
-    for flag in ("specular", "diffuse", "dispersion"):
-        if flag in touched:
-            fields[flag] = True
-    varying = params.d_min != params.d_max or "thickness" in touched
-    fields["thickness"] = params.thickness_mode if varying else "constant"
-    normals = params.normal_mode
-    if normals == "tilted" and params.tilt == 0.0 and "tilt" not in animated:
-        normals = "parallel"
-    if normals == "correlated" and (not varying or (params.bump_strength == 0.0 and "bump_strength" not in animated)):
-        normals = "parallel"
-    fields["normals"] = normals
-    return EffectPlan(**fields)
+    policy.check_backend(backend, params.lobe)
 
 
 def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
@@ -250,7 +168,7 @@ def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
     params = params_of(mat)
     backend = settings(mat).backend
     check_backend(params, backend)
-    return params, backend, conservative_plan(params, animated_parameters(mat))
+    return params, backend, plan_effects(params, M.animated_parameters(mat))
 
 
 def material_problem(mat) -> str | None:
@@ -314,8 +232,7 @@ def adopt(mat, keep: str | None = None) -> None:
             if s.name in values and s.name != keep:
                 setattr(st, s.name, s.check(values[s.name]))
         if "backend" in values and keep != "backend":
-            if values["backend"] not in M.BACKENDS:
-                raise ParameterError("backend", values["backend"], "one of " + ", ".join(map(repr, M.BACKENDS)))
+            policy.check_backend(values["backend"])
             st.backend = values["backend"]
         st.adopted = True
 
@@ -360,11 +277,10 @@ def apply_to_object(obj, params: LayeredParams | None = None, backend: str | Non
     params = params.validate()
     if backend is None:
         backend = settings(mat).backend if mat is not None else "nodes"
-    if backend not in M.BACKENDS:
-        raise ParameterError("backend", backend, "one of " + ", ".join(repr(b) for b in M.BACKENDS))
+    policy.check_backend(backend)
     check_backend(params, backend)
-    animated = animated_parameters(mat) if mat is not None else set()
-    return _apply(obj, params, backend, conservative_plan(params, animated), preview)
+    animated = M.animated_parameters(mat) if mat is not None else set()
+    return _apply(obj, params, backend, plan_effects(params, animated), preview)
 
 
 def remove_from_object(obj) -> bool:

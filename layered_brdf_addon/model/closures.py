@@ -38,7 +38,8 @@ from . import ops_numpy, program
 from .brdf import diffuse_rho, specular_brdf
 from .geometry import dot, safe_normalize
 from .params import WAVELENGTHS_NM, LayeredParams
-from .plan import EffectPlan, plan_effects
+from .plan import EffectPlan
+from .policy import plan_effects
 
 INV_2PI = 0.5 / np.pi
 

@@ -1,0 +1,97 @@
+"""Policy: which backend runs which lobe, and which effects a material's shader contains.
+
+Every layer (panel, operators, command line, batch, gallery, ``apply_layered_material``)
+asks this module; none repeats its rules.  bpy-free.
+
+Planning is a pure function of the parameters and of the set of parameters that are
+*animated* (keyframed, driven, or fed by a linked socket): an animated parameter may take
+any value of its range on some frame, so every effect it could switch on stays in the
+shader.  The planner never drops an effect that another frame needs.
+"""
+from __future__ import annotations
+
+from typing import Iterable
+
+from .params import LayeredParams, ParameterError
+from .plan import EffectPlan
+
+#: The shader backends: a node group of stock nodes, or an OSL shader (Cycles CPU / OptiX).
+BACKENDS = ("nodes", "osl")
+
+#: The specular closures each backend can build.
+LOBES_BY_BACKEND = {"nodes": ("beckmann",), "osl": ("beckmann", "phong")}
+
+# Optical thickness r1 d beyond which, integrated over the visible band, the interference
+# term changes the colour by less than 1 CIEDE2000 (docs/spectral.md; measured by
+# spectral.interference_cutoff_optical_nm, which a test compares with this value).
+INTERFERENCE_CUTOFF_OPTICAL_NM = 4146.0
+
+#: The parameters whose value decides an effect, by the effect they decide.
+DECIDING_PARAMETERS = {
+    "specular": ("ks",),
+    "diffuse": ("kd",),
+    "thickness": ("d_min", "d_max"),
+    "tilt": ("tilt",),
+    "bump": ("bump_strength",),
+    "dispersion": ("r1_r", "r1_g", "r1_b"),
+    "interference": ("d_min", "r1_r", "r1_g", "r1_b", "r0"),
+}
+
+
+def check_backend(backend: str, lobe: str | None = None) -> None:
+    """Raise :class:`ParameterError` unless ``backend`` exists and can build ``lobe``."""
+    if backend not in BACKENDS:
+        raise ParameterError("backend", backend, "one of " + ", ".join(repr(b) for b in BACKENDS))
+    if lobe is not None and lobe not in LOBES_BY_BACKEND[backend]:
+        others = [b for b in BACKENDS if lobe in LOBES_BY_BACKEND[b]]
+        hint = f" (choose the {' or '.join(others)} backend for {lobe!r})" if others else ""
+        raise ParameterError("lobe", lobe, f"one of {', '.join(map(repr, LOBES_BY_BACKEND[backend]))} "
+                                           f"with the {backend} backend{hint}")
+
+
+def supports(backend: str, lobe: str) -> bool:
+    return lobe in LOBES_BY_BACKEND.get(backend, ())
+
+
+def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
+    """The effects the shader must contain for ``p`` on every frame.
+
+    ``animated``: names of parameters that may change between frames (keyframes, drivers,
+    linked sockets).  See docs/effect-planning.md.
+    """
+    animated = frozenset(animated)
+
+    def moving(effect: str) -> bool:
+        return any(n in animated for n in DECIDING_PARAMETERS[effect])
+
+    varying = p.d_min != p.d_max or moving("thickness")
+    thickness = p.thickness_mode if varying else "constant"
+    normals = p.normal_mode
+    if normals == "tilted" and p.tilt == 0.0 and not moving("tilt"):
+        normals = "parallel"
+    if normals == "correlated" and (not varying or (p.bump_strength == 0.0 and not moving("bump"))):
+        normals = "parallel"  # a constant thickness has no gradient: n1 = n0
+    dispersion = not (p.r1_r == p.r1_g == p.r1_b) or moving("dispersion")
+    spectral = spectral_count(p.accuracy)
+    interference = not (spectral and not moving("interference") and interference_averages_out(p))
+    return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
+                      thickness=thickness, normals=normals, dispersion=dispersion, lobe=p.lobe,
+                      spectral=spectral, interference=interference)
+
+
+def spectral_count(accuracy: str) -> int:
+    """Number of wavelengths of an accuracy mode (0: the paper's RGB)."""
+    return 0 if accuracy == "rgb" else int(accuracy[len("spectral"):])
+
+
+def interference_averages_out(p: LayeredParams) -> bool:
+    """Whether, integrated over the visible band, the interference term of every point is
+    below 1 CIEDE2000.  The phase spread grows with the optical path: ``2 r1 d`` for the
+    diffuse part, ``r1 d (s_i + s_o) >= 2 d sqrt(r1^2 - r0^2) / r0`` for the specular one
+    (``s`` the refracted cosines, smallest at grazing), so the thinnest layer and smallest
+    index decide.  In RGB (three wavelengths) nothing averages: the paper's model keeps it.
+    """
+    r1 = min(p.r1) / p.r0
+    if r1 <= 1.0:
+        return False
+    return min(p.d_min, p.d_max) * (r1 * r1 - 1.0) ** 0.5 > INTERFERENCE_CUTOFF_OPTICAL_NM
