@@ -44,7 +44,7 @@ def test_white_furnace_albedo_matches_closure_form(furnace, name):
     geo, idx = _pixels(furnace, k)
     n0 = geo.n0[idx[:, 0], idx[:, 1]]
     d = thickness_field(p)(geo.p_object[idx[:, 0], idx[:, 1]])
-    n1 = lower_normal(p, n0, geo.p_object[idx[:, 0], idx[:, 1]], thickness_field(p))
+    n1 = lower_normal(p, n0, geo.p_object[idx[:, 0], idx[:, 1]], d)
     def shading(params, n0_, n1_, d_, l, v):
         res = C.shade_closures(params, n0_, n1_, d_, v, plan_effects(params))
         return C.evaluate_closures(res, n0_, v, l, params.lobe)

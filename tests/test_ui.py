@@ -29,7 +29,7 @@ from layered_brdf_addon.model.params import PARAM_SPECS, iter_sockets
 from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model.presets import PRESETS
 from layered_brdf_addon.model.sphere import Sun
-from node_groups import layered as node_group_builder
+from layered_brdf_addon.backends import node_group as node_group_builder
 
 ROOT = Path(__file__).resolve().parents[1]
 # 40 degrees off the view, above it: spheres in a row along x don't shadow each other.

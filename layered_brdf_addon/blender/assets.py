@@ -13,7 +13,7 @@ import bpy
 
 from ..model.plan import EffectPlan
 from . import material as M
-from ._deps import node_group_builder
+from ..backends import node_group as node_group_builder
 
 CATALOG_ID = "4b0f3f52-5d0c-4c55-9d2e-6b8d1c1f7a21"  # "Layered BRDF"
 CATALOG_PATH = "Layered BRDF"

@@ -10,7 +10,7 @@ from ..model.plan import EffectPlan
 from ..model import policy
 from ..model.policy import plan_effects
 from . import osl as osl_backend
-from ._deps import node_group_builder
+from ..backends import node_group as node_group_builder
 
 MATERIAL_KEY = "layered_brdf"  # custom property marking materials made by the add-on
 AOV_THICKNESS = "layer_thickness"

@@ -1,62 +1,20 @@
-"""The OSL backend: the shader source as an internal text (it travels in the .blend)."""
+"""The OSL shader in Blender: an internal text per plan (it travels in the .blend), compiled
+into a Script node."""
 from __future__ import annotations
 
 import os
 import sys
-from pathlib import Path
 
 import bpy
 
+from ..backends.osl_shader import shader_source
 from ..model.plan import EffectPlan
-from ..model.spectral_tables import tables
 
-OSL_VERSION = 1
-OSL_PATH = Path(__file__).resolve().parents[2] / "osl" / "layered_brdf.osl"
-
-THICKNESS_CODES = {"noise": 0, "height": 1, "constant": 2}
-NORMAL_CODES = {"parallel": 0, "tilted": 1, "correlated": 2}
-
-
-def defines(plan: EffectPlan) -> str:
-    """Preprocessor lines selecting the compiled variant of the shader for ``plan``."""
-    lines = [
-        f"#define LAYERED_SPECULAR {int(plan.specular)}",
-        f"#define LAYERED_DIFFUSE {int(plan.diffuse)}",
-        f"#define LAYERED_THICKNESS {THICKNESS_CODES[plan.thickness]}",
-        f"#define LAYERED_NORMALS {NORMAL_CODES[plan.normals]}",
-        f"#define LAYERED_DISPERSION {int(plan.dispersion)}",
-        f"#define LAYERED_LOBE {1 if plan.lobe == 'phong' else 0}",
-        f"#define LAYERED_SPECTRAL {plan.spectral}",
-        f"#define LAYERED_INTERFERENCE {int(plan.interference)}",
-    ]
-    if plan.spectral:
-        lines += _spectral_defines(plan)
-    return "\n".join(lines) + "\n"
-
-
-def _spectral_defines(plan: EffectPlan) -> list[str]:
-    """Baked tables and lobe groups of the spectral variant (as program.shade_spectral)."""
-    from ..model import program
-
-    t = tables(plan.spectral)
-    groups, leads = program.spectral_groups(t["wavelengths"], plan.dispersion)
-    lead = [leads.get(g, -1) for g in range(3)]
-
-    def arr(values, fmt="{:.9g}"):
-        return "{" + ", ".join(fmt.format(v) for v in values) + "}"
-
-    return [
-        f"#define LAYERED_SPECTRAL_3N {3 * plan.spectral}",
-        f"#define LAYERED_SPECTRAL_LAMBDA {arr(t['wavelengths'])}",
-        f"#define LAYERED_SPECTRAL_CAUCHY {arr([x for row in t['cauchy'] for x in row])}",
-        f"#define LAYERED_SPECTRAL_RGB {arr([x for row in t['rgb'] for x in row])}",
-        f"#define LAYERED_SPECTRAL_GROUP {arr(groups, '{:d}')}",
-        f"#define LAYERED_SPECTRAL_LEAD {arr(lead, '{:d}')}",
-    ]
 
 
 def source(plan: EffectPlan) -> str:
-    return f"// layered-brdf OSL v{OSL_VERSION}, variant {plan.key}\n" + defines(plan) + OSL_PATH.read_text()
+    """The OSL shader for ``plan``, written from the shading program."""
+    return shader_source(plan)
 
 
 def text_for(plan: EffectPlan):

@@ -24,7 +24,7 @@ from ..model.policy import plan_effects
 from . import assets
 from . import material as M
 from . import osl as osl_backend
-from ._deps import node_group_builder
+from ..backends import node_group as node_group_builder
 
 SETTINGS = "layered_brdf_settings"  # the PointerProperty on bpy.types.Material
 BUILD_KEY = "layered_brdf_build"  # written by apply_layered_material

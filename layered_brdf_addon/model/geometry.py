@@ -48,50 +48,24 @@ def refract(v: np.ndarray, n: np.ndarray, eta) -> tuple[np.ndarray, np.ndarray]:
     return np.where(valid[..., None], t, 0.0), valid
 
 
-def tangent_axis(n0: np.ndarray, up=Z_AXIS, fallback=X_AXIS) -> np.ndarray:
-    """Tilt axis ``normalize(cross(up, n0))``; ``fallback`` where ``|cross| < 1e-4`` (SPEC)."""
-    c = np.cross(np.broadcast_to(up, np.shape(n0)), n0)
-    length = np.sqrt(dot(c, c))
-    ok = length >= 1e-4
-    t = c / np.where(ok, length, 1.0)[..., None]
-    return np.where(ok[..., None], t, np.broadcast_to(fallback, np.shape(t)))
-
-
-def rotate_about(v: np.ndarray, axis: np.ndarray, angle) -> np.ndarray:
-    """Rotate ``v`` about the unit ``axis`` by ``angle`` radians (Rodrigues)."""
-    c = np.cos(angle)
-    s = np.sin(angle)
-    c = np.asarray(c)[..., None] if np.ndim(c) else c
-    s = np.asarray(s)[..., None] if np.ndim(s) else s
-    return v * c + np.cross(axis, v) * s + axis * dot(axis, v)[..., None] * (1.0 - c)
-
-
 def tilted_normal(n0: np.ndarray, tilt_deg, azimuth_deg=0.0, up=Z_AXIS, fallback=X_AXIS) -> np.ndarray:
-    """Lower normal ``n1``: ``n0`` rotated by ``tilt`` about the tilt axis (SPEC conventions).
+    """Lower normal ``n1`` of a constant tilt: the shading program's step (SPEC conventions).
 
-    The axis is ``normalize(cross(up, n0))`` (``fallback`` where the cross product
-    vanishes), turned about ``n0`` by ``azimuth``.
+    ``n0`` rotated by ``tilt`` about the tilt axis ``normalize(cross(up, n0))`` (``fallback``
+    where the cross product vanishes), the axis turned about ``n0`` by ``azimuth``.
     """
-    t = tangent_axis(n0, up, fallback)
-    t = rotate_about(t, n0, np.radians(azimuth_deg))
-    return safe_normalize(rotate_about(n0, t, np.radians(tilt_deg)), n0)
+    from . import ops_numpy, program
+
+    n1 = program.tilted_normal(ops_numpy, ops_numpy.vec(n0), np.asarray(tilt_deg, dtype=float),
+                               np.asarray(azimuth_deg, dtype=float), tuple(map(float, up)),
+                               tuple(map(float, fallback)))
+    return np.asarray(n1)
 
 
 def correlated_normal(n0: np.ndarray, grad_d: np.ndarray, strength) -> np.ndarray:
-    """Lower normal from the thickness gradient: ``normalize(n0 + s * grad_t(d))``.
+    """Lower normal from the thickness gradient, ``normalize(n0 + s grad_t(d))``: the shading
+    program's step.  ``grad_d`` is in nm per unit length; only its tangential part is used."""
+    from . import ops_numpy, program
 
-    ``grad_d`` is in nm per object unit; only its tangential part is used.
-    """
-    g = grad_d - dot(grad_d, n0)[..., None] * n0
-    return safe_normalize(n0 + np.asarray(strength)[..., None] * g if np.ndim(strength) else n0 + strength * g, n0)
-
-
-def finite_difference_gradient(f, p: np.ndarray, step: float) -> np.ndarray:
-    """Forward-difference gradient of the scalar field ``f`` at ``p`` (the shaders' scheme)."""
-    f0 = f(p)
-    g = np.empty(np.shape(p), dtype=float)
-    for k in range(3):
-        dp = np.zeros(3)
-        dp[k] = step
-        g[..., k] = (f(p + dp) - f0) / step
-    return g
+    return np.asarray(program.correlated_normal(ops_numpy, ops_numpy.vec(n0), ops_numpy.vec(grad_d),
+                                                np.asarray(strength, dtype=float)))

@@ -138,3 +138,85 @@ def combine(x, y, z):
     """A vector from three scalars."""
     x, y, z = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float), np.asarray(z, dtype=float))
     return vec(np.stack([x, y, z], axis=-1))
+
+
+def function(fn, values, settings):
+    """Run a named step of the program (the OSL backend emits it as a function)."""
+    return fn(sys.modules[__name__], *values, **settings)
+
+
+def after(state, x):
+    """``x`` (a backend that schedules by dependency waits for ``state``; numpy need not)."""
+    return x
+
+
+class NoiseUnavailable(ValueError):
+    """numpy does not evaluate Blender's noise: the thickness must come from the render."""
+
+
+class ShadingPoint:
+    """numpy ops that also know a shading point: the material's inputs and the geometry.
+
+    ``inputs``: parameter values by socket name (scalars or per-point arrays); ``normal``,
+    ``incoming`` (towards the camera) and ``p_object``: (..., 3) arrays; ``matrix``: the
+    object's 3x3 linear part (object to world), identity by default.
+    """
+
+    def __init__(self, inputs, normal, incoming, p_object, matrix=None, base_color=(1.0, 1.0, 1.0),
+                 normal_input=(0.0, 0.0, 0.0)):
+        self.inputs = dict(inputs)
+        self.normal = vec(normal)
+        self.view = vec(np.broadcast_to(np.asarray(incoming, dtype=float), np.shape(normal)))
+        self.p_object = vec(p_object)
+        self.matrix = np.eye(3) if matrix is None else np.asarray(matrix, dtype=float)[:3, :3]
+        self.base_color = base_color
+        self.normal_input = normal_input
+
+    def __getattr__(self, name):  # the arithmetic of the module
+        return getattr(sys.modules[__name__], name)
+
+    def function(self, fn, values, settings):
+        return fn(self, *values, **settings)
+
+    def call(self, name, fn, inputs, **static):
+        args = {k: vec(v) if isinstance(v, tuple) and len(v) == 3 else v for k, v in inputs.items()}
+        return fn(self, **args, **static)
+
+    # the shading point ---------------------------------------------------------
+    def input(self, name):
+        if name == "Normal":
+            return vec(np.broadcast_to(np.asarray(self.normal_input, dtype=float), np.shape(self.normal)))
+        return np.asarray(self.inputs[name], dtype=float)
+
+    def input_color(self, name):
+        return tuple(np.asarray(c, dtype=float) for c in self.base_color)
+
+    def shading_normal(self):
+        return self.normal
+
+    def incoming(self):
+        return self.view
+
+    def object_position(self):
+        return self.p_object
+
+    def object_to_world(self, v):
+        return vec(_plain(v) @ self.matrix.T)
+
+    def world_to_object(self, v):
+        return vec(_plain(v) @ np.linalg.inv(self.matrix).T)
+
+    def noise_fbm(self, p, w, scale, detail, roughness):
+        raise NoiseUnavailable("numpy does not evaluate Blender's noise: pass the render's thickness "
+                               "(and lower normal) passes")
+
+
+def named(hint, x):
+    """``x`` (the OSL backend names its temporary ``hint``)."""
+    return x
+
+
+def clamp_input(x, lo, hi):
+    """An input clamped to its parameter's range; NaN gives ``lo``."""
+    x = np.asarray(x, dtype=float)
+    return np.where(np.isnan(x), lo, np.clip(x, lo, hi))

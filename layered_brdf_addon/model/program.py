@@ -1,26 +1,50 @@
 """The shading program, written once for every backend that runs it.
 
-``shade(ops, inputs, plan)`` computes, from the view direction and the local layer
-configuration, the closures that stand for the layered BRDF (the decomposition of
-docs/closure-decomposition.md).  ``ops`` supplies arithmetic: numpy arrays
-(:mod:`.ops_numpy`, the closure form used to predict renders) or Blender shader
-nodes (``node_groups``, the node group).  Python control flow depends only on the
-:class:`~.plan.EffectPlan`, never on parameter values, so every parameter stays a
-live shader input.  ``osl/layered_brdf.osl`` is the same program written by hand.
+``layered_surface(ops, plan)`` is the whole shader: it reads the material's inputs,
+computes the layer's thickness and lower normal at the shading point (the surface
+prelude), and returns the closures that stand for the layered BRDF (the decomposition
+of docs/closure-decomposition.md) with the shader's other outputs.  ``ops`` supplies
+arithmetic and the shading point's geometry: numpy arrays (:mod:`.ops_numpy`, the
+closure form used to predict renders), Blender shader nodes (the node group) or OSL
+source text (the OSL shader).  Python control flow depends only on the
+:class:`~.plan.EffectPlan`, never on parameter values, so every parameter stays a live
+shader input.
+
+Functions marked :func:`shader_function` are the program's named steps: the OSL backend
+emits each as an OSL function of the same name, the others run them inline.
 
 Values: scalars and 3-vectors of the backend; Python floats are constants.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from .params import WAVELENGTHS_NM
+from .params import WAVELENGTHS_NM, iter_sockets
 from .plan import EffectPlan
 
 INV_2PI = 0.5 / math.pi
+DEG = math.pi / 180.0
 MIN_COS = 0.05  # lower bound of the view cosine used to widen Beckmann lobes
+GRADIENT_STEP = 1.0e-3  # forward-difference step (world units) of the thickness gradient
+D_LIMIT = 1.0e6  # largest thickness (nm): the range of d_min and d_max
+
+
+def shader_function(fn):
+    """Mark ``fn(ops, *values, **settings)`` as a named step of the program.
+
+    Values are backend scalars or vectors (or Python constants); keyword-only settings
+    are Python values that select a variant.  A backend's ``ops.function`` runs it: numpy
+    and the node backend inline it, the OSL backend emits an OSL function once and calls it.
+    """
+    @functools.wraps(fn)
+    def step(ops, *values, **settings):
+        return ops.function(fn, values, settings)
+
+    step.program_step = fn
+    return step
 
 
 @dataclass
@@ -41,20 +65,24 @@ class ShadingResult:
     extras: dict = field(default_factory=dict)
 
 
-# ---------------------------------------------------------------- helpers
+# ---------------------------------------------------------------- the paper's terms
+@shader_function
 def schlick(ops, cos_t, f):
-    """Eq. 7 for a direction pointing away from the surface."""
+    """Eq. 7 for a direction pointing away from the surface; a grazing or below-horizon
+    direction gives F = 1 (the cosine is clamped)."""
     x = 1.0 - ops.clamp(cos_t, 0.0, 1.0)
     x2 = x * x
     return f + (1.0 - f) * (x2 * x2 * x)
 
 
-def fresnel_f0(r1, r0):
-    """Eq. 8."""
+@shader_function
+def fresnel_f0(ops, r1, r0):
+    """Eq. 8: Fresnel coefficient at normal incidence."""
     q = (r0 - r1) / (r0 + r1)
     return q * q
 
 
+@shader_function
 def transmission_factor(ops, s, f):
     """Eq. 9 with ``s = <v, -n0>`` of the in-layer direction: ``(1 - f)(1 - (1 - s)^5)``."""
     x = ops.clamp(1.0 - s, 0.0, 1.0)
@@ -62,13 +90,17 @@ def transmission_factor(ops, s, f):
     return (1.0 - f) * (1.0 - x2 * x2 * x)
 
 
+@shader_function
 def angle2(ops, a, b):
-    """Squared chord between unit vectors, ``2 - 2 <a, b>``: the squared angle for small angles."""
+    """Squared chord between unit vectors, ``2 - 2 <a, b>``: the squared angle for small
+    angles.  Rounding can push it just below 0 for equal vectors: clamped."""
     return ops.maximum(2.0 - 2.0 * ops.dot(a, b), 0.0)
 
 
+@shader_function
 def beckmann_lambda(ops, alpha2, mu):
-    """Cycles' rational approximation of Beckmann's Smith Lambda."""
+    """Cycles' rational approximation of Beckmann's Smith Lambda.  A grazing view floors
+    ``mu^2`` at 1e-12; a normal view floors ``a``."""
     mu2 = ops.maximum(mu * mu, 1e-12)
     t = alpha2 * ops.maximum(1.0 / mu2 - 1.0, 0.0)
     a = 1.0 / ops.sqrt(ops.maximum(t, 1e-12))
@@ -76,32 +108,49 @@ def beckmann_lambda(ops, alpha2, mu):
     return ops.select(ops.lt(t, 0.39), 0.0, lam)
 
 
+@shader_function
 def lobe_alpha(ops, e, mu):
-    """Beckmann alpha of a Phong exponent, widened by 1/sqrt(cos) to keep the lobe's energy."""
+    """Beckmann alpha of a Phong exponent, ``sqrt(2 / (4 e + 2))``, widened by 1/sqrt(cos) to
+    keep the lobe's energy.  Exponent 0 gives alpha 1, a grazing view is bounded by MIN_COS."""
     return ops.minimum(ops.sqrt(2.0 / ((4.0 * ops.maximum(e, 0.0) + 2.0) * ops.clamp(mu, MIN_COS, 1.0))), 1.0)
 
 
-def lobe_peak(ops, lobe, e, alpha, mu):
-    """The closure's value (cosine included) at its own mirror direction."""
+@shader_function
+def lobe_peak(ops, e, alpha, mu, *, lobe):
+    """The closure's value (light cosine included) at its own mirror direction; ``mu`` is
+    floored at 1e-4 so that the peak and its inverse stay finite at a grazing view."""
     mu = ops.maximum(mu, 1e-4)
     if lobe == "phong":
+        # phong_ramp: cosNO (e + 2)/(2 pi) cos^e, which is mu (e + 2)/(2 pi) at the mirror.
         return mu * (e + 2.0) * INV_2PI
+    # Beckmann: D / (4 cosNV (1 + Lambda_V + Lambda_L)) at the mirror, D(h = N) = 1/(pi alpha^2).
     alpha2 = alpha * alpha
     return 1.0 / (math.pi * alpha2 * 4.0 * mu * (1.0 + 2.0 * beckmann_lambda(ops, alpha2, mu)))
 
 
-def closure_for(ops, lobe, name, normal, e, v, amplitudes):
-    """A closure about ``normal`` whose value at its centre equals ``amplitudes``."""
+@shader_function
+def lobe_weight(ops, amplitude, normal, e, v, *, lobe):
+    """The closure about ``normal`` whose value at its centre equals ``amplitude``: its
+    weight and its Beckmann alpha."""
     mu = ops.dot(normal, v)
     alpha = lobe_alpha(ops, e, mu)
-    peak = lobe_peak(ops, lobe, e, alpha, mu)
-    inv = 1.0 / peak
+    weight = amplitude / lobe_peak(ops, e, alpha, mu, lobe=lobe)
+    return weight, alpha
+
+
+def closure_for(ops, lobe, name, normal, e, v, amplitudes):
+    """A closure about ``normal`` whose value at its centre equals ``amplitudes`` (r, g, b)."""
+    mu = ops.named(f"mu_{name}", ops.dot(normal, v))
+    alpha = ops.named(f"alpha_{name}", lobe_alpha(ops, e, mu))
+    inv = ops.named(f"inv_peak_{name}", 1.0 / lobe_peak(ops, e, alpha, mu, lobe=lobe))
     return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes))
 
 
+@shader_function
 def lobe_correlation(ops, p, q, delta2):
-    """Normalised overlap <gp, gq> / (|gp| |gq|) of two tangent-plane Gaussian lobes, and
-    ``1 - rho^2`` computed without cancellation (float32 shaders need it)."""
+    """Normalised overlap <gp, gq> / (|gp| |gq|) of two tangent-plane Gaussian lobes whose
+    centres are ``delta2`` apart (squared), and ``1 - rho^2`` written without cancellation
+    (equal lobes give rho -> 1, and float32 shaders would lose every digit)."""
     s = p + q
     qq = 2.0 * ops.sqrt(p * q) / s  # 1 for equal exponents
     x = 0.5 * (p * q) / s * delta2
@@ -112,16 +161,19 @@ def lobe_correlation(ops, p, q, delta2):
     return rho, one_minus_rho2
 
 
+@shader_function
 def fold_interference(ops, AR, AT, AI, eR, eT, eI, cR, cT, cI):
     """Non-negative least-squares fit of ``AR gR + AT gT + AI gI`` (``AI < 0``) by
-    ``wR gR + wT gT``, unchanged where ``AI >= 0``.
+    ``wR gR + wT gT``, unchanged where ``AI >= 0``: Cycles clamps a negative closure weight
+    to 0, so destructive interference (cos 2 Phi < 0, eq. 5) is folded into the reflected
+    and transmitted lobes.
 
-    Gaussian lobes ``g = exp(-e theta^2 / 2)`` in the tangent plane; the normal
-    equations are solved in the basis of unit-norm lobes (``|g|^2 = 1/(2e)`` up to a
-    common factor), with a small ridge: equal lobes make them singular.  Where the
-    2x2 solution has a negative weight, the better single-lobe fit is used.
+    Gaussian lobes ``g = exp(-e theta^2 / 2)`` in the tangent plane; the normal equations
+    are solved in the basis of unit-norm lobes (``|g|^2 = 1/(2e)`` up to a common factor),
+    with a small ridge: equal lobes make them singular.  Where the 2x2 solution has a
+    negative weight, the better single-lobe fit is used.
     """
-    eR = ops.maximum(eR, 1e-3)
+    eR = ops.maximum(eR, 1e-3)  # exponent 0 has no finite Gaussian norm
     eT = ops.maximum(eT, 1e-3)
     eI = ops.maximum(eI, 1e-3)
     uR = 1.0 / ops.sqrt(2.0 * eR)
@@ -144,15 +196,19 @@ def fold_interference(ops, AR, AT, AI, eR, eT, eI, cR, cT, cI):
     wR = ops.select(both, wR2, ops.select(r_better, wR1, 0.0)) / uR
     wT = ops.select(both, wT2, ops.select(r_better, 0.0, wT1)) / uT
     neg = ops.lt(AI, 0.0)
-    return ops.select(neg, wR, AR), ops.select(neg, wT, AT), ops.select(neg, 0.0, AI)
+    AR_folded = ops.select(neg, wR, AR)
+    AT_folded = ops.select(neg, wT, AT)
+    AI_folded = ops.select(neg, 0.0, AI)
+    return AR_folded, AT_folded, AI_folded
 
 
-# ---------------------------------------------------------------- the program
-def channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v, interference=True):
-    """Amplitudes, centres and exponents of one channel's three lobes."""
-    e0, e1, ks, r0 = P["e0"], P["e1"], P["ks"], P["r0"]
-    f = fresnel_f0(r1, r0)
+# ---------------------------------------------------------------- one channel
+@shader_function
+def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, interference=True):
+    """Amplitudes, centres and exponents of one channel's three lobes (eqs. 3-11)."""
+    f = fresnel_f0(ops, r1, r0)
     F = schlick(ops, cos_v, f)
+    # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
     AR_amp = ks * F * (e0 + 2.0) * INV_2PI
     AR = AR_amp * cos_v
     # The light path leaving along v: refract -v into the layer (t_o), mirror it on the
@@ -188,13 +244,14 @@ def channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v, interference=True):
     cos_ci = ops.clamp(ops.dot(c_I, n0), 0.0, 1.0)
     s_i = ops.sqrt(1.0 - eta * eta * (1.0 - cos_ci * cos_ci))
     if interference:
-        phase = (math.pi / lam) * r1 * d * (s_i + s_o)
+        phase = (math.pi / lam) * r1 * d * (s_i + s_o)  # eq. 3
         AI = ops.select(through, 2.0 * ops.cos(2.0 * phase) * ops.sqrt(AR_amp * AT_amp) * atten * cos_ci, 0.0)
     else:
         AI = 0.0  # averaged over the band: cos(2 Phi) has mean 0
     return dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), l_star=l_star, c_I=c_I)
 
 
+@shader_function
 def diffuse_rho(ops, r1, r0, lam, d):
     """Eqs. 15 and 18: ``1 + 2 cos(4 pi r1 d / lambda) sqrt(Td (1 - Td))``."""
     td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
@@ -202,23 +259,25 @@ def diffuse_rho(ops, r1, r0, lam, d):
 
 
 def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
-    """``kd base rho_d`` per channel."""
-    return tuple(P["kd"] * base * diffuse_rho(ops, r1, P["r0"], lam, d)
-                 for r1, lam, base in zip(P["r1"], wavelengths, P["base"]))
+    """``kd base rho_d`` per channel (eq. 14)."""
+    return tuple(ops.named(f"diffuse_{c}", P["kd"] * base * diffuse_rho(ops, r1, P["r0"], lam, d))
+                 for c, r1, lam, base in zip("rgb", P["r1"], wavelengths, P["base"]))
 
 
 def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True):
-    """One channel: its lobes (eqs. 3-11), the fold, and the weights of its transmitted and
-    interference closures.  A node backend builds it once as a sub-group used per channel."""
-    P = dict(e0=e0, e1=e1, ks=ks, r0=r0)
+    """One channel: its lobes (eqs. 3-11), the fold, and the normal, exponent, alpha and
+    weight of its transmitted and interference closures.  A lobe centred on the direction
+    c is a closure about normalize(v + c).  A node backend builds it once as a sub-group
+    used per channel."""
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     r_v = n0 * (2.0 * ops.dot(v, n0)) - v
-    t = channel_terms(ops, P, r1, lam, n0, n1, v, d, cos_v, r_v, interference)
+    t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference)
     AR, AT, AI = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], r_v, t["l_star"], t["c_I"])
     out = dict(AR=AR)
     for tag, amp, centre, e in (("T", AT, t["l_star"], t["eT"]), ("I", AI, t["c_I"], t["eI"])):
-        cl = closure_for(ops, lobe, tag, ops.normalize(v + centre, n0), e, v, (amp,))
-        out.update({f"N_{tag}": cl.normal, f"e_{tag}": e, f"alpha_{tag}": cl.alpha, f"w_{tag}": cl.weight[0]})
+        normal = ops.normalize(v + centre, n0)
+        w, alpha = lobe_weight(ops, amp, normal, e, v, lobe=lobe)
+        out.update({f"N_{tag}": normal, f"e_{tag}": e, f"alpha_{tag}": alpha, f"w_{tag}": w})
     return out
 
 
@@ -235,17 +294,13 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
     groups travel packed in vectors.
     """
     out = {}
-    # max(d, d - |state|) is d, but a shader compiler cannot see it: everything this step
-    # computes then waits for the whole previous state, so a compiler evaluates the steps one
-    # after the other and only the running state stays alive, whatever the number of
-    # wavelengths (Cycles' SVM has a stack of 255 floats per shader).
+    # Everything this step computes waits for the whole previous state, so that a node
+    # backend evaluates the steps one after the other and only the running state stays
+    # alive, whatever the number of wavelengths (Cycles' SVM has a stack of 255 floats).
     state = (acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc_I2, lead_T0, lead_T1, lead_T2,
              lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI)
-    size = 0.0
-    for x in state:
-        size = size + ops.length(x)
-    d = ops.maximum(d, d - size)
-    r1 = ops.maximum(r1, r1 - size)  # everything that depends on the index waits too
+    d = ops.after(state, d)
+    r1 = ops.after(state, r1)  # everything that depends on the index waits too
     if diffuse and not interference:
         out["acc_D"] = acc_D + m  # rho_d averaged over the band: 1
     elif diffuse:
@@ -359,4 +414,142 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
             g = blocks[1]
             res.glossy.append(Closure(label, g[f"N_{tag}"], g[f"e_{tag}"], g[f"alpha_{tag}"],
                                       tuple(b[f"w_{tag}"] for b in blocks)))
+    return res
+
+
+# ---------------------------------------------------------------- the surface prelude
+@shader_function
+def rotate_about(ops, a, axis, angle):
+    """Rotate ``a`` about the unit ``axis`` by ``angle`` radians (Rodrigues)."""
+    c = ops.cos(angle)
+    s = ops.sin(angle)
+    return a * c + ops.cross(axis, a) * s + axis * (ops.dot(axis, a) * (1.0 - c))
+
+
+@shader_function
+def tangent_axis(ops, n0, up, fallback):
+    """Tilt axis ``normalize(cross(up, n0))``; at the poles, where n0 is along ``up`` and the
+    cross product vanishes (length below 1e-4), ``fallback``."""
+    c = ops.cross(up, n0)
+    return ops.select_vec(ops.lt(ops.length(c), 1e-4), fallback, ops.normalize(c, fallback))
+
+
+@shader_function
+def tilted_normal(ops, n0, tilt_deg, azimuth_deg, up, fallback):
+    """Lower normal of a constant tilt: ``n0`` rotated by ``tilt_deg`` about the tilt axis,
+    the axis first turned about ``n0`` by ``azimuth_deg``.  Any tilt up to 180 degrees is
+    valid: at 90 or 180 degrees no path crosses the layer (eq. 11)."""
+    t = tangent_axis(ops, n0, up, fallback)
+    t = rotate_about(ops, t, n0, azimuth_deg * DEG)
+    return ops.normalize(rotate_about(ops, n0, t, tilt_deg * DEG), n0)
+
+
+@shader_function
+def correlated_normal(ops, n0, grad_d, strength):
+    """Lower normal from the thickness gradient: ``normalize(n0 + s grad_t(d))``, the
+    tangential part of the gradient only; a degenerate sum falls back to ``n0``."""
+    g = grad_d - n0 * ops.dot(grad_d, n0)
+    return ops.normalize(n0 + g * strength, n0)
+
+
+@shader_function
+def thickness_factor(ops, p, scale, detail, roughness, phase, *, pattern):
+    """The thickness pattern's factor at the object-space position ``p``: Blender's Noise
+    Texture (4D fBm, W = phase, lacunarity 2, normalised), or ``clamp(0.5 - 0.5 z, 0, 1)``,
+    a film that thickens downwards like a draining soap film."""
+    if pattern == "noise":
+        return ops.noise_fbm(p, phase, scale, detail, roughness)
+    return ops.clamp(0.5 - 0.5 * ops.dot(p, (0.0, 0.0, 1.0)), 0.0, 1.0)
+
+
+@shader_function
+def thickness_at(ops, p, d_min, d_max, scale, detail, roughness, phase, *, pattern):
+    """``d = d_min + (d_max - d_min) clamp(n, 0, 1)`` in nm, within [0, D_LIMIT].  With
+    ``d_min > d_max`` (sockets fed by textures) the same formula holds: the pattern runs
+    from ``d_min`` where the factor is 0 down to ``d_max`` where it is 1."""
+    n = thickness_factor(ops, p, scale, detail, roughness, phase, pattern=pattern)
+    return ops.clamp(d_min + (d_max - d_min) * ops.clamp(n, 0.0, 1.0), 0.0, D_LIMIT)
+
+
+@shader_function
+def thickness_gradient(ops, p, d, d_min, d_max, scale, detail, roughness, phase, *, pattern):
+    """World-space gradient of the thickness ``d`` at ``p`` (nm per world unit), by forward
+    differences along the world axes, each step taken into object space: component k is
+    ``(d(p + M^-1 h e_k) - d(p)) / h``, which is ``(M^-T grad_obj d)_k``, the inverse
+    transpose that a gradient (a covector) needs under rotation and non-uniform scale."""
+    h = GRADIENT_STEP
+    args = (d_min, d_max, scale, detail, roughness, phase)
+    dx = thickness_at(ops, p + ops.world_to_object((h, 0.0, 0.0)), *args, pattern=pattern) - d
+    dy = thickness_at(ops, p + ops.world_to_object((0.0, h, 0.0)), *args, pattern=pattern) - d
+    dz = thickness_at(ops, p + ops.world_to_object((0.0, 0.0, h)), *args, pattern=pattern) - d
+    return ops.combine(dx, dy, dz) * (1.0 / h)
+
+
+def pattern_inputs(P):
+    """The inputs of :func:`thickness_at` after the position."""
+    return (P["d_min"], P["d_max"], P["noise_scale"], P["noise_detail"], P["noise_roughness"], P["noise_phase"])
+
+
+def layer_thickness(ops, P, p_obj, plan: EffectPlan):
+    """Thickness ``d`` (nm) at the object-space position ``p_obj``."""
+    if plan.thickness == "constant":
+        return P["d_min"]
+    return thickness_at(ops, p_obj, *pattern_inputs(P), pattern=plan.thickness)
+
+
+def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan):
+    """Lower boundary normal ``n1`` (world space) at a point of upper normal ``n0``."""
+    if plan.normals == "tilted":
+        # The object's axes in world space: the tilt sticks to the object.
+        up = ops.normalize(ops.object_to_world((0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
+        x_axis = ops.normalize(ops.object_to_world((1.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
+        return tilted_normal(ops, n0, P["tilt"], P["tilt_azimuth"], up, x_axis)
+    if plan.normals == "correlated" and plan.thickness != "constant":
+        grad = thickness_gradient(ops, p_obj, d, *pattern_inputs(P), pattern=plan.thickness)
+        return correlated_normal(ops, n0, grad, P["bump_strength"])
+    return n0
+
+
+def clamped_inputs(ops):
+    """Every shader input, clamped to its parameter's allowed range (a texture or a driver
+    may feed any value)."""
+    return {spec.name: ops.named(f"{spec.name}_c", ops.clamp_input(ops.input(spec.name), spec.min, spec.max))
+            for spec in iter_sockets()}
+
+
+def program_inputs(P, tint=(1.0, 1.0, 1.0)):
+    """The inputs of :func:`shade` from the per-parameter values ``P``."""
+    return dict(r1=(P["r1_r"], P["r1_g"], P["r1_b"]), r0=P["r0"], e0=P["e0"], e1=P["e1"], ks=P["ks"], kd=P["kd"],
+                base=tuple(P[f"base_{c}"] * t for c, t in zip("rgb", tint)))
+
+
+def base_weight(ops, r1, r0, cos_v):
+    """What the top boundary transmits to the artist's base shader, ``1 - F(v)``: the mean
+    over the channels (a Mix Shader takes one factor)."""
+    f_sum = 0.0
+    for r in r1:
+        f_sum = f_sum + schlick(ops, cos_v, fresnel_f0(ops, r, r0))
+    return 1.0 - f_sum * (1.0 / 3.0)
+
+
+def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
+    """The whole shader at one shading point, from the material's inputs.
+
+    ``extras`` carries the shader's other outputs: ``thickness`` (nm), ``lower_normal``,
+    ``upper_normal`` (world space) and ``base_weight`` (the factor of the Base Shader input).
+    """
+    P = clamped_inputs(ops)
+    # A zero-length or NaN Normal input (unconnected, or a broken texture) falls back to
+    # the shading normal.
+    n0 = ops.normalize(ops.input("Normal"), ops.shading_normal())
+    v = ops.incoming()
+    p_obj = ops.object_position()
+    d = layer_thickness(ops, P, p_obj, plan)
+    n1 = lower_normal(ops, P, n0, p_obj, d, plan)
+    tint = tuple(ops.maximum(c, 0.0) for c in ops.input_color("Base Color"))
+    inputs = program_inputs(P, tint)
+    res = shade(ops, inputs, n0, n1, d, v, plan)
+    cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
+    transmitted = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
+    res.extras.update(thickness=d, lower_normal=n1, upper_normal=n0, base_weight=transmitted)
     return res

@@ -10,12 +10,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import program
 from .brdf import diffuse_rho, specular_brdf
-from .geometry import X_AXIS, Z_AXIS, correlated_normal, dot, finite_difference_gradient, safe_normalize, tilted_normal
-from .params import LayeredParams, WAVELENGTHS_NM
-
-# Finite-difference step (object units) of the thickness gradient, shared by OSL and nodes.
-GRADIENT_STEP = 1.0e-3
+from .geometry import Z_AXIS, dot, safe_normalize
+from .ops_numpy import NoiseUnavailable, ShadingPoint
+from .params import LayeredParams, WAVELENGTHS_NM, iter_sockets
+from .policy import plan_effects
 
 
 @dataclass(frozen=True)
@@ -104,37 +104,49 @@ def sphere_geometry(camera: OrthoCamera, centers=((0.0, 0.0, 0.0),), radius: flo
     return SphereGeometry(mask, which, p, p_obj, n0, -direction)
 
 
-def noise_factor_height(p_object: np.ndarray) -> np.ndarray:
-    """The 'height' pattern: ``clamp(0.5 - 0.5 z, 0, 1)`` (thicker downwards)."""
-    return np.clip(0.5 - 0.5 * p_object[..., 2], 0.0, 1.0)
+def shading_point(params: LayeredParams, n0, p_object, view=(0.0, 0.0, 1.0), matrix=None) -> ShadingPoint:
+    """numpy ops at points of normal ``n0`` and object-space position ``p_object``, with the
+    parameters' values as the shader's inputs (the node group's and OSL's socket values)."""
+    inputs = {spec.name: getattr(params, spec.name) for spec in iter_sockets()}
+    return ShadingPoint(inputs, n0, view, p_object, matrix)
 
 
-def thickness_from_factor(params: LayeredParams, factor: np.ndarray) -> np.ndarray:
-    """``d = d_min + (d_max - d_min) * clamp(n, 0, 1)`` in nm (SPEC)."""
-    return params.d_min + (params.d_max - params.d_min) * np.clip(factor, 0.0, 1.0)
+def thickness_field(params: LayeredParams, matrix=None):
+    """``d(p)`` as a function of object-space position (the shading program's thickness),
+    or None for the noise pattern, which numpy does not evaluate."""
+    plan = plan_effects(params)
+    if plan.thickness == "noise":
+        return None
+
+    def field_(p):
+        p = np.asarray(p, dtype=float)
+        pt = shading_point(params, np.zeros_like(p), p, matrix=matrix)
+        d = program.layer_thickness(pt, program.clamped_inputs(pt), pt.object_position(), plan)
+        return np.broadcast_to(np.asarray(d, dtype=float), p.shape[:-1]).copy()
+
+    return field_
 
 
-def thickness_field(params: LayeredParams):
-    """``d(p)`` as a function of object-space position, where numpy can compute it."""
-    if params.d_min == params.d_max:
-        return lambda p: np.full(np.shape(p)[:-1], params.d_min)
-    if params.thickness_mode == "height":
-        return lambda p: thickness_from_factor(params, noise_factor_height(p))
-    return None
+def lower_normal(params: LayeredParams, n0: np.ndarray, p_object: np.ndarray, d=None, matrix=None) -> np.ndarray:
+    """``n1`` for the parameters' normal mode (the shading program's lower normal).
 
-
-def lower_normal(params: LayeredParams, n0: np.ndarray, p_object: np.ndarray, d_field=None,
-                 object_up=Z_AXIS, object_x=X_AXIS) -> np.ndarray:
-    """``n1`` for the parameters' normal mode (SPEC conventions)."""
-    if params.normal_mode == "parallel":
-        return n0
-    if params.normal_mode == "tilted":
-        return tilted_normal(n0, params.tilt, params.tilt_azimuth, object_up, object_x)
-    if d_field is None:
-        raise ValueError("normal_mode 'correlated' needs a thickness field numpy can evaluate "
-                         "(pass the lower normal read from the render's AOV instead)")
-    grad = finite_difference_gradient(d_field, p_object, GRADIENT_STEP)
-    return correlated_normal(n0, grad, params.bump_strength)
+    ``d``: the thickness at the points (computed from the pattern when None).  The noise
+    pattern with correlated normals needs the render's lower-normal pass instead.
+    """
+    plan = plan_effects(params)
+    pt = shading_point(params, n0, p_object, matrix=matrix)
+    P = program.clamped_inputs(pt)
+    if d is None:
+        try:
+            d = program.layer_thickness(pt, P, pt.object_position(), plan)
+        except NoiseUnavailable:
+            d = np.zeros(np.shape(n0)[:-1])
+    try:
+        n1 = program.lower_normal(pt, P, pt.shading_normal(), pt.object_position(), d, plan)
+    except NoiseUnavailable:
+        raise ValueError("normal_mode 'correlated' with the noise pattern needs the render's lower normal "
+                         "(pass lower_normals read from the render's AOV)") from None
+    return np.asarray(np.broadcast_to(np.asarray(n1, dtype=float), np.shape(n0)))
 
 
 def exact_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTHS_NM):
@@ -149,7 +161,7 @@ def exact_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTH
 
 def render_spheres(params_list, camera: OrthoCamera, sun: Sun, centers=((0.0, 0.0, 0.0),), *,
                    normals=None, thickness=None, lower_normals=None, shading=exact_shading,
-                   prefer_analytic=False):
+                   prefer_analytic=False, matrices=None):
     """Expected image (H, W, 3) of spheres, sphere ``k`` carrying ``params_list[k]``.
 
     ``normals``, ``thickness`` and ``lower_normals`` (per-pixel arrays, e.g. read from the
@@ -157,6 +169,9 @@ def render_spheres(params_list, camera: OrthoCamera, sun: Sun, centers=((0.0, 0.
     normal where given; a noise pattern needs ``thickness`` (numpy does not evaluate Blender's
     noise).  ``shading`` is :func:`exact_shading` or a closure form with the same signature.
     With ``prefer_analytic``, ``thickness`` is used only where numpy cannot compute ``d``.
+    ``matrices``: per sphere, the 3x3 linear part of the object's transform (object to
+    world) when it is not ``radius * identity`` — a rotated, non-uniformly scaled object
+    whose mesh is a unit sphere in world space.
     Returns ``(image, geometry)``; ``geometry.extra`` holds the ``d`` and ``n1`` used.
     """
     if isinstance(params_list, LayeredParams):
@@ -171,8 +186,11 @@ def render_spheres(params_list, camera: OrthoCamera, sun: Sun, centers=((0.0, 0.
         if not np.any(sel):
             continue
         n0 = n0_all[sel]
+        matrix = None if matrices is None or matrices[k] is None else np.asarray(matrices[k], dtype=float)[:3, :3]
         p = geo.p_object[sel]
-        field_ = thickness_field(params)
+        if matrix is not None:
+            p = (geo.p_world[sel] - np.asarray(centers, dtype=float).reshape(-1, 3)[k]) @ np.linalg.inv(matrix).T
+        field_ = thickness_field(params, matrix)
         if thickness is not None and not (prefer_analytic and field_ is not None):
             d = np.asarray(thickness)[sel]
         elif field_ is not None:
@@ -182,7 +200,7 @@ def render_spheres(params_list, camera: OrthoCamera, sun: Sun, centers=((0.0, 0.
         if lower_normals is not None:
             n1 = safe_normalize(np.asarray(lower_normals)[sel], n0)
         else:
-            n1 = lower_normal(params, n0, p, field_)
+            n1 = lower_normal(params, n0, p, d, matrix)
         img[sel] = sun.strength * shading(params, n0, n1, d, sun.l, geo.view)
         d_all[sel] = d
         n1_all[sel] = n1

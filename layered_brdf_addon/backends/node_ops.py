@@ -249,7 +249,27 @@ class NodeOps:
         ok = self.gt(self.dot(v, v), 1e-20)
         return self.select_vec(ok, self.vmath("NORMALIZE", v), fallback)
 
+    def after(self, state, x):
+        """``x``, made to wait for every value of ``state``: ``max(x, x - sum |s|)`` is ``x``, but
+        Cycles cannot see it, so it evaluates what depends on ``x`` after the whole state and
+        only the running state stays alive on SVM's stack (255 floats)."""
+        size = 0.0
+        for s in state:
+            size = size + (self.length(s) if _kind(s) == "vector" else s)
+        return self.maximum(x, x - size)
+
+    def named(self, hint, x):
+        return x
+
+    def clamp_input(self, x, lo, hi):
+        """An input clamped to its parameter's range (a Clamp node)."""
+        return self.clamp(x, lo, hi)
+
     # sub-programs -----------------------------------------------------------
+    def function(self, fn, values, settings):
+        """A named step of the program: inlined (a sub-group per small step costs more nodes)."""
+        return fn(self, *values, **settings)
+
     def call(self, name, fn, inputs, **static):
         """Instance of a sub-group running ``fn`` (built once per name and static settings)."""
         key = name + "".join(f" {k}={v}" for k, v in sorted(static.items()))

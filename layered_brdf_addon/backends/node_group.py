@@ -1,0 +1,187 @@
+"""The node-group backend: the shading program built as a "Layered BRDF" shader node group.
+
+The group's inputs are the shader parameters of ``LayeredParams`` (the OSL shader's
+names), ``Normal``, ``Base Color`` and ``Base Shader``; its outputs are ``BSDF``,
+``Thickness`` (nm), ``Lower Normal`` and ``Upper Normal`` (world space), the last three
+for AOV passes.  Groups are stamped with :data:`NODE_GROUP_VERSION`, a digest of the
+code that shapes them, and their plan; a stale group is rebuilt in place.
+"""
+from __future__ import annotations
+
+import bpy
+
+from ..model import params as P_
+from ..model import program
+from ..model.plan import EffectPlan
+from ..model.policy import check_backend
+from .node_ops import Expr, NodeOps
+
+NODE_GROUP_VERSION = 4
+GROUP_PREFIX = "Layered BRDF"
+STAMP_KEY = "layered_brdf_version"
+PLAN_KEY = "layered_brdf_plan"
+
+
+def _source_digest() -> str:
+    """Digest of the code that shapes the groups: any change makes saved groups stale."""
+    import hashlib
+    import inspect
+
+    h = hashlib.sha1()
+    for mod in (program, inspect.getmodule(NodeOps), inspect.getmodule(_source_digest)):
+        h.update(inspect.getsource(mod).encode())
+    return h.hexdigest()[:12]
+
+
+_STAMP = None
+
+
+def build_stamp() -> str:
+    global _STAMP
+    if _STAMP is None:
+        _STAMP = f"{NODE_GROUP_VERSION}:{_source_digest()}"
+    return _STAMP
+
+
+def group_name(plan: EffectPlan) -> str:
+    return f"{GROUP_PREFIX} [{plan.key}]"
+
+
+def is_current(group, plan: EffectPlan) -> bool:
+    return group.get(STAMP_KEY) == build_stamp() and group.get(PLAN_KEY) == plan.key
+
+
+def ensure_group(plan: EffectPlan):
+    """The node group for ``plan``: reused when current, rebuilt in place when stale."""
+    check_backend("nodes", plan.lobe)
+    name = group_name(plan)
+    group = bpy.data.node_groups.get(name)
+    if group is not None and group.library is None and is_current(group, plan):
+        return group
+    if group is None or group.library is not None:
+        group = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    build_into(group, plan)
+    return group
+
+
+def _interface(group):
+    iface = group.interface
+    iface.clear()
+    for spec in P_.iter_sockets():
+        s = iface.new_socket(P_.socket_name(spec), in_out="INPUT", socket_type="NodeSocketFloat")
+        s.default_value = spec.default
+        s.min_value = max(spec.min, -3.0e38)
+        s.max_value = min(spec.max, 3.0e38)
+        unit = f" ({spec.unit})" if spec.unit else ""
+        s.description = f"{spec.label}{unit}: {spec.description}"
+    s = iface.new_socket("Normal", in_out="INPUT", socket_type="NodeSocketVector")
+    s.hide_value = True
+    s.description = "Upper-boundary normal; the shading normal when not connected"
+    s = iface.new_socket("Base Color", in_out="INPUT", socket_type="NodeSocketColor")
+    s.default_value = (1.0, 1.0, 1.0, 1.0)
+    s.description = "Multiplies the diffuse base colour (plug a texture here)"
+    s = iface.new_socket("Base Shader", in_out="INPUT", socket_type="NodeSocketShader")
+    s.description = "The artist's own material under the layer; it receives the transmitted 1 - F"
+    iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    s = iface.new_socket("Thickness", in_out="OUTPUT", socket_type="NodeSocketFloat")
+    s.description = "Layer thickness d in nm"
+    s = iface.new_socket("Lower Normal", in_out="OUTPUT", socket_type="NodeSocketVector")
+    s.description = "Normal n1 of the lower boundary, world space"
+    s = iface.new_socket("Upper Normal", in_out="OUTPUT", socket_type="NodeSocketVector")
+    s.description = "Normal n0 of the upper boundary (the shading normal used), world space"
+
+
+class GroupOps(NodeOps):
+    """Node ops at the top of the group: the material's inputs and the shading point."""
+
+    def __init__(self, group, gin, **kw):
+        super().__init__(group, **kw)
+        self.gin = gin
+        self._geometry = None
+
+    def input(self, name):
+        return Expr(self, self.gin.outputs[name], "vector" if name == "Normal" else "float", 0)
+
+    def input_color(self, name):
+        sep, dd = self.node("ShaderNodeSeparateColor", {"Color": Expr(self, self.gin.outputs[name], "vector", 0)})
+        return tuple(self.out(sep, dd, k, "float") for k in range(3))
+
+    def _geo(self, socket):
+        node, _ = self.node("ShaderNodeNewGeometry", depth=0) if self._geometry is None else (self._geometry, 0)
+        self._geometry = node
+        return self.out(node, 0, socket, "vector")
+
+    def shading_normal(self):
+        return self._geo("Normal")
+
+    def incoming(self):
+        return self._geo("Incoming")
+
+    def object_position(self):
+        node, _ = self.node("ShaderNodeTexCoord", depth=0)
+        return self.out(node, 0, "Object", "vector")
+
+    def _transform(self, vec, src, dst):
+        n, dd = self.node("ShaderNodeVectorTransform", {"Vector": vec}, vector_type="VECTOR",
+                          convert_from=src, convert_to=dst)
+        return self.out(n, dd, 0, "vector")
+
+    def object_to_world(self, vec):
+        return self._transform(vec, "OBJECT", "WORLD")
+
+    def world_to_object(self, vec):
+        return self._transform(vec, "WORLD", "OBJECT")
+
+    def noise_fbm(self, p, w, scale, detail, roughness):
+        n, dd = self.node("ShaderNodeTexNoise", {"Vector": p, "W": w, "Scale": scale, "Detail": detail,
+                                                 "Roughness": roughness, "Lacunarity": 2.0, "Distortion": 0.0},
+                          noise_dimensions="4D", noise_type="FBM", normalize=True)
+        return self.out(n, dd, "Fac", "float")
+
+
+def build_into(group, plan: EffectPlan) -> None:
+    """(Re)build ``group``'s nodes for ``plan``: idempotent, stamps version and plan."""
+    group.nodes.clear()
+    _interface(group)
+    gin = group.nodes.new("NodeGroupInput")
+    gin.location = (-200.0, 0.0)
+    gout = group.nodes.new("NodeGroupOutput")
+    ops = GroupOps(group, gin, x0=200.0, stamp=build_stamp(),
+                   subgroup_name=lambda key: f"{GROUP_PREFIX} part: {key}")
+    res = program.layered_surface(ops, plan)
+    extras = res.extras
+    n0 = extras["upper_normal"]
+
+    shaders = []
+    if res.diffuse is not None:
+        col, dd = ops.node("ShaderNodeCombineColor", {"Red": res.diffuse[0], "Green": res.diffuse[1],
+                                                      "Blue": res.diffuse[2]})
+        bsdf, dd = ops.node("ShaderNodeBsdfDiffuse", {"Color": ops.out(col, dd, 0, "vector"), "Roughness": 0.0,
+                                                      "Normal": n0})
+        shaders.append(ops.out(bsdf, dd, 0, "shader"))
+    for cl in res.glossy:
+        col, dd = ops.node("ShaderNodeCombineColor", {"Red": cl.weight[0], "Green": cl.weight[1],
+                                                      "Blue": cl.weight[2]})
+        rough = ops.sqrt(ops.clamp(cl.alpha, 0.0, 1.0))  # the Glossy node's Roughness is sqrt(alpha)
+        bsdf, dd = ops.node("ShaderNodeBsdfGlossy", {"Color": ops.out(col, dd, 0, "vector"), "Roughness": rough,
+                                                     "Normal": cl.normal}, distribution="BECKMANN")
+        bsdf.label = cl.name
+        shaders.append(ops.out(bsdf, dd, 0, "shader"))
+    mix, dd = ops.node("ShaderNodeMixShader", {"Fac": extras["base_weight"]})
+    group.links.new(gin.outputs["Base Shader"], mix.inputs[2])
+    shaders.append(ops.out(mix, dd, 0, "shader"))
+    total = None
+    for s in shaders:
+        if total is None:
+            total = s
+            continue
+        n, dd = ops.node("ShaderNodeAddShader", {0: total, 1: s})
+        total = ops.out(n, dd, 0, "shader")
+    gout.location = (ops.x0 + (max(ops._rows) + 2) * ops.COLUMN, 0.0)
+    group.links.new(total.socket, gout.inputs["BSDF"])
+    for name, value in (("Thickness", extras["thickness"]), ("Lower Normal", extras["lower_normal"]),
+                        ("Upper Normal", n0)):
+        group.links.new(value.socket, gout.inputs[name])
+    group[STAMP_KEY] = build_stamp()
+    group[PLAN_KEY] = plan.key
+    group["layered_brdf_node_count"] = ops.count

@@ -1,0 +1,504 @@
+"""OSL backend of the shading program: running the program writes OSL source.
+
+Values are :class:`Val` (an OSL expression and its kind, ``"float"``, ``"vector"`` or
+``"int"`` for comparisons) or Python floats (constants, written as literals).  Every
+:func:`~..model.program.shader_function` step and every ``ops.call`` sub-program becomes
+one OSL function of the same name, emitted once and called wherever the program calls
+it.  Temporaries take the names of the Python locals that hold them; a temporary used
+once and not named is written inline; one never used is dropped.  bpy-free.
+"""
+from __future__ import annotations
+
+import inspect
+import math
+import re
+import sys
+from dataclasses import dataclass, field
+
+Number = (int, float)
+
+# Identifiers a temporary may not take: OSL keywords, globals and the functions we call.
+RESERVED = set("""
+and break closure color continue do else emit float for if illuminance illuminate int matrix normal not or output
+point public return string struct vector void while shader surface volume displacement true false
+P I N Ng u v dPdu dPdv time dtime dPdtime Ps Ci
+dot cross normalize length clamp max min sqrt exp cos sin mix noise transform radians microfacet diffuse
+phong_ramp isnan isfinite abs floor select
+""".split())
+RENAMES = {"v": "V"}
+
+PREC_ATOM, PREC_UNARY, PREC_MUL, PREC_ADD, PREC_CMP, PREC_TERNARY = 100, 14, 13, 12, 9, 3
+_TOKEN = re.compile(r"\x01(\d+)\|(\d+)\x02")
+
+
+def literal(x) -> str:
+    """An OSL float literal."""
+    x = float(x)
+    if not math.isfinite(x):
+        x = math.copysign(3.0e38, x) if not math.isnan(x) else 0.0
+    s = f"{x:.9g}"
+    return s if any(c in s for c in ".en") else s + ".0"
+
+
+def _vector_literal(t) -> str:
+    return f"vector({', '.join(literal(c) for c in t)})"
+
+
+def _kind(x) -> str:
+    if isinstance(x, Val):
+        return x.kind
+    if isinstance(x, Number):
+        return "float"
+    if isinstance(x, (tuple, list)) and len(x) == 3:
+        return "vector"
+    raise TypeError(f"not a shader value: {x!r}")
+
+
+class Val:
+    """An OSL expression: a reference to a statement (a token) or an atom (a global, say)."""
+
+    __slots__ = ("ops", "ref", "kind", "token")
+
+    def __init__(self, ops, ref: str, kind: str, token: int | None = None):
+        self.ops, self.ref, self.kind, self.token = ops, ref, kind, token
+
+    def _bin(self, other, op, reverse=False):
+        a, b = (other, self) if reverse else (self, other)
+        return self.ops.binary(op, a, b)
+
+    def __add__(self, o):
+        return self._bin(o, "+")
+
+    def __radd__(self, o):
+        return self._bin(o, "+", True)
+
+    def __sub__(self, o):
+        return self._bin(o, "-")
+
+    def __rsub__(self, o):
+        return self._bin(o, "-", True)
+
+    def __mul__(self, o):
+        return self._bin(o, "*")
+
+    def __rmul__(self, o):
+        return self._bin(o, "*", True)
+
+    def __truediv__(self, o):
+        return self._bin(o, "/")
+
+    def __rtruediv__(self, o):
+        return self._bin(o, "/", True)
+
+    def __neg__(self):
+        return self.ops.emit(self.kind, f"-{self.ops.use(self, PREC_UNARY + 1)}", PREC_UNARY)
+
+
+@dataclass
+class Statement:
+    token: int
+    kind: str
+    expr: str | None  # None: declared without a value (an output of a call)
+    prec: int = PREC_ATOM
+    hint: str | None = None  # the Python local that holds it
+    output: str | None = None  # assigned straight to this output parameter
+    raw: bool = False  # a statement of its own (a call with outputs, a closure sum): always kept
+    name: str = ""
+    key_hint: bool = False  # the hint is an output's key: locals do not rename it
+
+
+@dataclass
+class FunctionBody:
+    """The statements of one OSL function (or of the shader) being written."""
+
+    name: str
+    params: list = field(default_factory=list)  # (token, kind, name, is_output)
+    statements: list = field(default_factory=list)
+    ret: tuple | None = None  # (kind, expression)
+    by_token: dict = field(default_factory=dict)
+
+
+_DECL = {"float": "float", "vector": "vector", "int": "int"}
+
+
+class OslOps:
+    """Writes OSL: functions (in the order they are first needed) and one body at a time."""
+
+    def __init__(self):
+        self.functions: dict[tuple, tuple[str, str, list]] = {}  # key -> (name, source, output kinds)
+        self.order: list[str] = []
+        self._names: dict[str, tuple] = {}
+        self._bodies: list[FunctionBody] = []
+        self._count = 0
+        self._return_kind: dict = {}
+        self._output_keys: dict = {}
+
+    # ------------------------------------------------------------------ statements
+    @property
+    def body(self) -> FunctionBody:
+        return self._bodies[-1]
+
+    def _new_token(self) -> int:
+        self._count += 1
+        return self._count
+
+    def emit(self, kind: str, expr: str | None, prec: int = PREC_ATOM, raw: bool = False) -> Val:
+        st = Statement(self._new_token(), kind, expr, prec, raw=raw)
+        self.body.statements.append(st)
+        self.body.by_token[st.token] = st
+        return Val(self, "", kind, st.token)
+
+    def raw(self, text: str) -> None:
+        """A statement of the body that is not a value (a closure sum, say)."""
+        st = Statement(self._new_token(), "void", text, raw=True)
+        self.body.statements.append(st)
+
+    def use(self, x, min_prec: int = 0) -> str:
+        """The text of value ``x`` inside an expression that needs precedence ``min_prec``."""
+        if isinstance(x, Val):
+            if x.token is None:
+                return x.ref  # an atom: an identifier or a call
+            return f"\x01{x.token}|{min_prec}\x02"
+        if isinstance(x, Number):
+            s = literal(x)
+            return f"({s})" if s.startswith("-") and min_prec > PREC_ADD else s
+        return _vector_literal(x)
+
+    def atom(self, text: str, kind: str) -> Val:
+        return Val(self, text, kind)
+
+    def call_expr(self, fname: str, args, kind: str) -> Val:
+        return self.emit(kind, f"{fname}({', '.join(self.use(a) for a in args)})")
+
+    # ------------------------------------------------------------------ arithmetic
+    def binary(self, op, a, b):
+        ka, kb = _kind(a), _kind(b)
+        if isinstance(a, Number) and isinstance(b, Number):
+            return {"+": a + b, "-": a - b, "*": a * b, "/": a / b if b != 0 else 0.0}[op]
+        if op == "*" and ((isinstance(a, Number) and a == 0.0) or (isinstance(b, Number) and b == 0.0)):
+            return 0.0 if "vector" not in (ka, kb) else (0.0, 0.0, 0.0)
+        if op == "*" and isinstance(a, Number) and a == 1.0:
+            return b
+        if op in "*/" and isinstance(b, Number) and b == 1.0:
+            return a
+        if op == "+" and isinstance(a, Number) and a == 0.0:
+            return b
+        if op in "+-" and isinstance(b, Number) and b == 0.0:
+            return a
+        kind = "vector" if "vector" in (ka, kb) else ("int" if ka == kb == "int" else "float")
+        prec = PREC_MUL if op in "*/" else PREC_ADD
+        return self.emit(kind, f"{self.use(a, prec)} {op} {self.use(b, prec + 1)}", prec)
+
+    def clamp(self, x, lo, hi):
+        if isinstance(x, Number):
+            return min(max(x, lo), hi)
+        return self.call_expr("clamp", (x, lo, hi), "float")
+
+    def sqrt(self, x):
+        return math.sqrt(max(x, 0.0)) if isinstance(x, Number) else self.call_expr("safe_sqrt", (x,), "float")
+
+    def exp(self, x):
+        return math.exp(min(x, 80.0)) if isinstance(x, Number) else self.call_expr("safe_exp", (x,), "float")
+
+    def cos(self, x):
+        return math.cos(x) if isinstance(x, Number) else self.call_expr("cos", (x,), "float")
+
+    def sin(self, x):
+        return math.sin(x) if isinstance(x, Number) else self.call_expr("sin", (x,), "float")
+
+    def atan2(self, y, x):
+        return self.call_expr("atan2", (y, x), "float")
+
+    def maximum(self, a, b):
+        if isinstance(a, Number) and isinstance(b, Number):
+            return max(a, b)
+        return self.call_expr("max", (a, b), "float")
+
+    def minimum(self, a, b):
+        if isinstance(a, Number) and isinstance(b, Number):
+            return min(a, b)
+        return self.call_expr("min", (a, b), "float")
+
+    def _compare(self, op, a, b):
+        return self.emit("int", f"{self.use(a, PREC_CMP + 1)} {op} {self.use(b, PREC_CMP + 1)}", PREC_CMP)
+
+    def lt(self, a, b):
+        return self._compare("<", a, b)
+
+    def gt(self, a, b):
+        return self._compare(">", a, b)
+
+    def _select(self, c, a, b, kind):
+        if isinstance(c, Number):
+            return a if c > 0.5 else b
+        cond = self.use(c, PREC_TERNARY + 1) if _kind(c) == "int" else f"{self.use(c, PREC_CMP + 1)} > 0.5"
+        return self.emit(kind, f"{cond} ? {self.use(a, PREC_TERNARY + 1)} : {self.use(b, PREC_TERNARY + 1)}",
+                         PREC_TERNARY)
+
+    def select(self, c, a, b):
+        if isinstance(a, Number) and isinstance(b, Number) and a == b:
+            return a
+        return self._select(c, a, b, "float")
+
+    def select_vec(self, c, a, b):
+        return self._select(c, a, b, "vector")
+
+    def dot(self, a, b):
+        for x, y in ((a, b), (b, a)):
+            if isinstance(y, tuple) and sorted(y) == [0.0, 0.0, 1.0]:
+                return self.emit("float", f"{self.use(x, PREC_ATOM)}[{y.index(1.0)}]")
+        return self.call_expr("dot", (a, b), "float")
+
+    def length(self, a):
+        return self.call_expr("length", (a,), "float")
+
+    def cross(self, a, b):
+        return self.call_expr("cross", (a, b), "vector")
+
+    def combine(self, x, y, z):
+        if all(isinstance(c, Number) for c in (x, y, z)):
+            return (float(x), float(y), float(z))
+        return self.call_expr("vector", (x, y, z), "vector")
+
+    def normalize(self, v, fallback):
+        """Unit ``v``; ``fallback`` for a zero-length or non-finite ``v``."""
+        return self.call_expr("safe_normalize_or", (v, fallback), "vector")
+
+    def after(self, state, x):
+        return x  # OSL runs statements in order: nothing to schedule
+
+    def named(self, hint, x):
+        """Give the temporary holding ``x`` the name ``hint``."""
+        if isinstance(x, Val) and x.token in self.body.by_token:
+            self.body.by_token[x.token].hint = hint
+        return x
+
+    def clamp_input(self, x, lo, hi):
+        """An input clamped to its parameter's range; NaN gives ``lo``."""
+        return self.call_expr("clamp_input", (x, max(lo, -3.0e38), min(hi, 3.0e38)), "float")
+
+    # ------------------------------------------------------------------ functions
+    def function(self, fn, values, settings):
+        names = list(inspect.signature(fn).parameters)[1:1 + len(values)]
+        return self._invoke(fn, dict(zip(names, values)), settings)
+
+    def call(self, name, fn, inputs, **static):
+        return self._invoke(fn, dict(inputs), static)
+
+    def _invoke(self, fn, inputs: dict, settings: dict):
+        kinds = tuple((k, _kind(v)) for k, v in inputs.items())
+        key = (fn.__qualname__, tuple(sorted(settings.items())), kinds)
+        if key not in self.functions:
+            self._define(fn, key, kinds, settings)
+        fname, _, outputs = self.functions[key]
+        args = list(inputs.values())
+        if outputs is None:  # one value: returned
+            return self.call_expr(fname, args, self._return_kind[key])
+        outs = []
+        for out_name, kind in outputs:
+            v = self.emit(kind, None)
+            st = self.body.by_token[v.token]
+            st.hint = out_name
+            st.key_hint = self._output_keys[key] is not None
+            outs.append(v)
+        self.raw(f"{fname}({', '.join(self.use(a) for a in args + outs)});")
+        keys = self._output_keys[key]
+        if keys is None:
+            return tuple(outs)
+        return dict(zip(keys, outs))
+
+    def _function_name(self, fn, key, settings) -> str:
+        name = fn.__name__
+        if name in self._names and self._names[name] != key:
+            name = "_".join([name] + [str(v) for _, v in sorted(settings.items())])
+            while name in self._names and self._names[name] != key:
+                name += "_"
+        self._names[name] = key
+        return name
+
+    def _define(self, fn, key, kinds, settings):
+        fname = self._function_name(fn, key, settings)
+        body = FunctionBody(fname)
+        self._bodies.append(body)
+        params = {}
+        for pname, kind in kinds:
+            tok = self._new_token()
+            st = Statement(tok, kind, None, hint=pname)
+            body.by_token[tok] = st
+            body.params.append(st)
+            params[pname] = Val(self, "", kind, tok)
+        result, local_names = _run_capturing_locals(fn, self, params, settings)
+        self._bodies.pop()
+        doc = inspect.getdoc(fn) or ""
+        if isinstance(result, (Val, *Number)) or (isinstance(result, tuple) and len(result) == 3
+                                                 and all(isinstance(c, Number) for c in result)):
+            kind = _kind(result)
+            self._return_kind[key] = kind
+            body.ret = (kind, result)
+            self.functions[key] = (fname, self._write(body, doc, local_names), None)
+        else:
+            if isinstance(result, dict):
+                out_names = list(result)
+                values = list(result.values())
+                self._output_keys[key] = out_names
+            else:
+                values = list(result)
+                by_id = {id(v): n for n, v in local_names.items()}
+                out_names = [by_id.get(id(v), f"out{i}") for i, v in enumerate(values)]
+                self._output_keys[key] = None
+            outputs = [(n, _kind(v)) for n, v in zip(out_names, values)]
+            body.ret = ("outputs", list(zip(out_names, values)))
+            self.functions[key] = (fname, self._write(body, doc, local_names), outputs)
+        self.order.append(fname)
+
+    # ------------------------------------------------------------------ writing
+    def _write(self, body: FunctionBody, doc: str, local_names: dict) -> str:
+        text = self.resolve(body, local_names)
+        params = ", ".join(f"{_DECL[p.kind]} {p.name}" for p in body.params)
+        if body.ret[0] == "outputs":
+            outs = ", ".join(f"output {_DECL[_kind(v)]} {n}" for n, v in body.ret[1])
+            params = f"{params}, {outs}" if params else outs
+            rtype = "void"
+        else:
+            rtype = _DECL[body.ret[0]]
+        comment = _comment(doc)
+        head = f"{rtype} {body.name}("
+        if len(head) + len(params) > 99:
+            params = (",\n" + " " * len(head)).join(params.split(", "))
+        return f"{comment}{head}{params})\n{{\n{text}}}\n"
+
+    def resolve(self, body: FunctionBody, local_names: dict | None = None, indent: str = "  ",
+                reserved=frozenset()) -> str:
+        """The statements of ``body`` as OSL text: named, inlined where used once, pruned."""
+        local_names = local_names or {}
+        tail = []  # (target, expression) of outputs / return
+        if body.ret is not None and body.ret[0] == "outputs":
+            tail = [(n, self.use(v)) for n, v in body.ret[1]]
+        elif body.ret is not None:
+            tail = [(None, self.use(body.ret[1]))]
+        # Names of locals; a parameter whose name a local takes over becomes NAME_in.
+        params = {p.token for p in body.params}
+        for lname, v in local_names.items():
+            if isinstance(v, Val) and v.token in body.by_token and v.token not in params \
+                    and not body.by_token[v.token].key_hint:
+                body.by_token[v.token].hint = lname
+        hints = {st.hint for st in body.statements}
+        # An output that is a named statement of its own name is written to directly.
+        out_targets = set()
+        for i, (target, expr) in enumerate(tail):
+            m = _TOKEN.fullmatch(expr)
+            if target is None or m is None:
+                continue
+            st = body.by_token.get(int(m.group(1)))
+            if st is not None and st not in body.params and st.expr is not None and st.output is None \
+                    and not st.raw and st.hint in (None, target):
+                st.output = target
+                out_targets.add(i)
+        # Use counts, dead statements removed (from the end backwards).
+        texts = [st.expr or "" for st in body.statements] + [e for _, e in tail]
+        uses: dict[int, int] = {}
+        for t in texts:
+            for m in _TOKEN.finditer(t):
+                uses[int(m.group(1))] = uses.get(int(m.group(1)), 0) + 1
+        live = []
+        for st in reversed(body.statements):
+            if not st.raw and st.output is None and uses.get(st.token, 0) == 0:
+                for m in _TOKEN.finditer(st.expr or ""):
+                    uses[int(m.group(1))] -= 1
+                continue
+            live.append(st)
+        live.reverse()
+        inline = {st.token for st in live if not st.raw and st.expr is not None and st.output is None
+                  and st.hint is None and uses.get(st.token, 0) == 1}
+        # Names: parameters first, then named statements, then the rest.
+        taken = set(reserved)
+
+        def unique(base):
+            base = RENAMES.get(base, base)
+            if base in RESERVED:
+                base += "_"
+            name, k = base, 2
+            while name in taken:
+                name, k = f"{base}_{k}", k + 1
+            taken.add(name)
+            return name
+
+        outputs_named = {t for t, _ in tail if t}
+        taken |= outputs_named
+        for p in body.params:
+            p.name = unique(p.hint + "_in" if p.hint in hints else p.hint)
+        counter = 0
+        for st in live:
+            if st.raw and st.kind == "void":
+                continue
+            if st.output is not None:
+                st.name = st.output
+            elif st.token not in inline:
+                if st.hint:
+                    st.name = unique(st.hint)
+                else:
+                    counter += 1
+                    st.name = unique(f"t{counter}")
+
+        def render(text: str) -> str:
+            def sub(m):
+                tok, need = int(m.group(1)), int(m.group(2))
+                st = body.by_token[tok]
+                if tok in inline:
+                    inner = render(st.expr)
+                    return f"({inner})" if st.prec < need else inner
+                return st.name
+
+            return _TOKEN.sub(sub, text)
+
+        lines = []
+        for st in live:
+            if st.token in inline:
+                continue
+            if st.raw and st.kind == "void":
+                lines.append(f"{indent}{render(st.expr)}")
+            elif st.expr is None:
+                lines.append(f"{indent}{_DECL[st.kind]} {st.name};")
+            elif st.output is not None:
+                lines.append(f"{indent}{st.name} = {render(st.expr)};")
+            else:
+                lines.append(f"{indent}{_DECL[st.kind]} {st.name} = {render(st.expr)};")
+        for i, (target, expr) in enumerate(tail):
+            if i in out_targets:
+                continue
+            if target is None:
+                lines.append(f"{indent}return {render(expr)};")
+            else:
+                lines.append(f"{indent}{target} = {render(expr)};")
+        return "".join(line + "\n" for line in lines)
+
+    def source_of_functions(self) -> str:
+        by_name = {name: src for name, src, _ in self.functions.values()}
+        return "\n".join(by_name[n] for n in self.order)
+
+
+def _comment(doc: str) -> str:
+    if not doc:
+        return ""
+    text = doc.replace("``", "").replace("*/", "* /")
+    lines = text.splitlines()
+    out = ["/* " + lines[0]] + [(" * " + ln).rstrip() for ln in lines[1:]]
+    return "\n".join(out) + " */\n"
+
+
+def _run_capturing_locals(fn, ops, params: dict, settings: dict):
+    """Run ``fn(ops, **params, **settings)``; return its result and its locals at return."""
+    captured = {}
+    code = fn.__code__
+
+    def profiler(frame, event, arg):
+        if event == "return" and frame.f_code is code and not captured:
+            captured.update(frame.f_locals)
+
+    previous = sys.getprofile()
+    sys.setprofile(profiler)
+    try:
+        result = fn(ops, **params, **settings)
+    finally:
+        sys.setprofile(previous)
+    return result, {k: v for k, v in captured.items() if k != "ops" and not (k in params and v is params[k])}

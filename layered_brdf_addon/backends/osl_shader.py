@@ -1,0 +1,209 @@
+"""The OSL backend: the shading program written out as a Cycles OSL shader, one per plan.
+
+``shader_source(plan)`` runs :func:`~..model.program.layered_surface` on
+:class:`~.osl_ops.OslOps`: every step of the program becomes an OSL function of the same
+name, and the shader body is the program's top level.  The shader's parameters (names,
+defaults, ranges, help) come from the parameter definitions.  Each plan gets its own
+shader, with only the code its effects need.  bpy-free.
+"""
+from __future__ import annotations
+
+import functools
+
+from ..model import params as P_
+from ..model import program
+from ..model.plan import EffectPlan
+from ..model.policy import check_backend
+from .osl_ops import OslOps, Val, _run_capturing_locals, literal
+
+OSL_VERSION = 2
+SHADER_NAME = "layered_brdf"
+
+# Shader parameters and outputs besides the material's parameters (OSL names have no spaces;
+# the node group's sockets are "Base Color", "Base Shader", "Lower Normal", "Upper Normal").
+SOCKET_NAMES = {"Base Color": "BaseColor", "Base Shader": "Base", "Lower Normal": "LowerNormal",
+                "Upper Normal": "UpperNormal", "Normal": "Normal", "BSDF": "BSDF", "Thickness": "Thickness"}
+
+HEADER = """\
+/* SPDX-License-Identifier: Apache-2.0
+ *
+ * Layered RGB BRDF (Granier & Heidrich, "A Simple Layered RGB BRDF Model",
+ * Graphical Models 65, 2003) as a Cycles OSL shader, effect plan {key}.
+ *
+ * Written by layered_brdf_addon/backends/osl_shader.py from the shading program
+ * (layered_brdf_addon/model/program.py): each function below is a step of the program,
+ * under the same name.  An OSL shader never sees the light direction, so the specular
+ * part is a weighted sum of built-in glossy closures whose weights depend on the view:
+ *
+ *   - a reflected lobe about the mirror of the view (closure normal n0), eq. 6;
+ *   - transmitted lobes about l*, the light direction whose path through the layer
+ *     leaves along the view, eq. 10;
+ *   - interference lobes 2 cos(2 Phi) sqrt(R T), eqs. 3 and 5, folded into the other
+ *     two where negative (Cycles clamps negative closure weights to 0).
+ *
+ * Each lobe amplitude is the pixel value per unit irradiance at the lobe's centre; it
+ * becomes a closure weight by dividing by the closure's own value there.  The diffuse
+ * part is eqs. 14-18 on a diffuse closure about n0.  Cycles' I points towards the viewer
+ * (the program's v, named V here: v is an OSL global).  Thickness d is in nanometres.
+ *
+ * Plan: {plan}.
+ */
+
+#include "stdcycles.h"
+#include "node_noise.h"
+"""
+
+LIBRARY = """\
+/* ------------------------------------------------------------------ guarded maths */
+
+/* sqrt of a value that rounding (or a failed refraction) may push below 0. */
+float safe_sqrt(float x)
+{
+  return sqrt(max(x, 0.0));
+}
+
+/* exp that cannot overflow: arguments come from products of exponents up to 1e5. */
+float safe_exp(float x)
+{
+  return exp(min(x, 80.0));
+}
+
+/* Unit vector, or `fallback` for zero-length vectors (V + l* = 0, a degenerate Normal
+ * input) and non-finite ones (inf or NaN from a broken texture). */
+vector safe_normalize_or(vector a, vector fallback)
+{
+  float len2 = dot(a, a);
+  if (!(len2 > 1e-20) || !isfinite(len2)) {
+    return fallback;
+  }
+  return a / sqrt(len2);
+}
+
+/* An input that any texture or driver may feed, clamped to its parameter's range
+ * (params.py); NaN falls to the lower bound. */
+float clamp_input(float x, float lo, float hi)
+{
+  if (isnan(x)) {
+    return lo;
+  }
+  return clamp(x, lo, hi);
+}
+
+/* Blender's Noise Texture node, 4D fBm, lacunarity 2, distortion 0, normalised:
+ * p and w scaled by `scale`, then noise_fbm (node_noise_texture.osl). */
+float thickness_noise(vector p, float w, float scale, float detail, float roughness)
+{
+  vector ps = p * scale;
+  return noise_fbm(vector4(ps[0], ps[1], ps[2], w * scale), detail, roughness, 2.0, 1);
+}
+"""
+
+GLOSSY = {
+    "beckmann": """\
+/* The glossy closure of a lobe about `Nc`: Beckmann microfacets.  OSL's microfacet()
+ * takes alpha itself, not the Glossy node's Roughness = sqrt(alpha). */
+closure color glossy_lobe(vector Nc, float e, float alpha, color weight)
+{
+  return weight * microfacet("beckmann", normal(Nc), vector(0.0), alpha, alpha, 0.0, 0);
+}
+""",
+    "phong": """\
+/* The glossy closure of a lobe about `Nc`: a normalised Phong lobe of exponent e about the
+ * mirror of the view (phong_ramp with eight equal colours). */
+closure color glossy_lobe(vector Nc, float e, float alpha, color weight)
+{
+  color ramp[8] = {color(1.0), color(1.0), color(1.0), color(1.0),
+                   color(1.0), color(1.0), color(1.0), color(1.0)};
+  return weight * phong_ramp(normal(Nc), e, ramp);
+}
+""",
+}
+
+
+class ShaderOps(OslOps):
+    """OSL ops in the shader body: the shader's parameters and globals."""
+
+    def input(self, name):
+        return self.atom(SOCKET_NAMES.get(name, name), "vector" if name == "Normal" else "float")
+
+    def input_color(self, name):
+        osl = SOCKET_NAMES[name]
+        return tuple(self.atom(f"{osl}[{k}]", "float") for k in range(3))
+
+    def shading_normal(self):
+        return self.atom("N", "vector")
+
+    def incoming(self):
+        return self.atom("I", "vector")
+
+    def object_position(self):
+        return self.emit("vector", 'transform("object", P)')
+
+    def object_to_world(self, vec):
+        return self.emit("vector", f'transform("object", "world", {self.use(vec)})')
+
+    def world_to_object(self, vec):
+        return self.emit("vector", f'transform("world", "object", {self.use(vec)})')
+
+    def noise_fbm(self, p, w, scale, detail, roughness):
+        return self.call_expr("thickness_noise", (p, w, scale, detail, roughness), "float")
+
+
+def _parameter_lines() -> list[str]:
+    lines = []
+    for spec in P_.iter_sockets():
+        unit = f" ({spec.unit})" if spec.unit else ""
+        meta = [f'string label = "{spec.label}{unit}"', f'string help = "{spec.description}"',
+                f"float min = {literal(spec.min)}", f"float max = {literal(spec.max)}"]
+        if spec.soft_min is not None:
+            meta += [f"float slidermin = {literal(spec.soft_min)}", f"float slidermax = {literal(spec.soft_max)}"]
+        lines.append(f"float {P_.socket_name(spec)} = {literal(spec.default)}\n      [[ {', '.join(meta)} ]]")
+    lines += [
+        "normal Normal = N",
+        "color BaseColor = color(1.0)",
+        "closure color Base = 0",
+        "output closure color BSDF = 0",
+        "output float Thickness = 0",
+        "output vector LowerNormal = 0",
+        "output vector UpperNormal = 0",
+    ]
+    return lines
+
+
+@functools.lru_cache(maxsize=64)
+def shader_source(plan: EffectPlan) -> str:
+    """The OSL source of the shader for ``plan``."""
+    check_backend("osl", plan.lobe)
+    ops = ShaderOps()
+    from .osl_ops import FunctionBody
+
+    body = FunctionBody(SHADER_NAME)
+    ops._bodies.append(body)
+    res, local_names = _run_capturing_locals(program.layered_surface, ops, {}, {"plan": plan})
+    x = res.extras
+    ops.raw("/* The artist's own shader under the layer receives what the top transmits, 1 - F(v). */")
+    ops.raw(f"BSDF = {ops.use(x['base_weight'], 14)} * Base;")
+    if res.diffuse is not None:
+        ops.raw("/* Eqs. 14-18: a Lambertian closure about n0 tinted by kd base rho_d. */")
+        ops.raw(f"BSDF += {_colour(ops, res.diffuse)} * diffuse({ops.use(x['upper_normal'])});")
+    for cl in res.glossy:
+        ops.raw(f"BSDF += glossy_lobe({ops.use(cl.normal)}, {ops.use(cl.exponent)}, {ops.use(cl.alpha)}, "
+                f"{_colour(ops, cl.weight)});  /* {cl.name} */")
+    ops.raw(f"Thickness = {ops.use(x['thickness'])};")
+    ops.raw(f"LowerNormal = {ops.use(x['lower_normal'])};")
+    ops.raw(f"UpperNormal = {ops.use(x['upper_normal'])};")
+    reserved = {P_.socket_name(s) for s in P_.iter_sockets()} | set(SOCKET_NAMES.values())
+    main = ops.resolve(body, local_names, reserved=reserved)
+    params = ",\n                    ".join(_parameter_lines())
+    parts = [HEADER.format(key=plan.key, plan="; ".join(plan.describe())), LIBRARY, GLOSSY[plan.lobe],
+             "/* ------------------------------------------------------------------ the program's steps */\n",
+             ops.source_of_functions(),
+             "/* ------------------------------------------------------------------ the shader */\n",
+             f"shader {SHADER_NAME}({params})\n{{\n{main}}}\n"]
+    return "\n".join(parts)
+
+
+def _colour(ops, rgb) -> str:
+    if all(not isinstance(c, Val) for c in rgb) and len(set(rgb)) == 1:
+        return f"color({literal(rgb[0])})"
+    return f"color({', '.join(ops.use(c) for c in rgb)})"

@@ -1,1 +1,0 @@
-"""Node groups built by code: the layered BRDF from stock Cycles/EEVEE nodes."""
