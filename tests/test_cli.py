@@ -213,8 +213,8 @@ def test_bad_job_file_exits_2(tmp_path):
 @pytest.mark.slow
 def test_render_writes_png_exr_sidecar_that_predict_the_pixels(tmp_path):
     from layered_brdf_addon.blender.scene import passes_from_exr
-    from layered_brdf_addon.model.closures import closure_shading
-    from layered_brdf_addon.model.compare import agreement, lit_mask
+    from layered_brdf_reference.closures import closure_shading
+    from layered_brdf_reference.compare import agreement, lit_mask
     from layered_brdf_addon.model.sphere import render_spheres
     from layered_brdf_addon.outputs import scene_from_sidecar
     from PIL import Image
