@@ -38,11 +38,6 @@ def save_png(path: str | os.PathLike, pixels: np.ndarray) -> Path:
     return Path(path)
 
 
-def write_png(path: str | os.PathLike, linear_rgb: np.ndarray, alpha: np.ndarray | None = None) -> Path:
-    """Write linear scene-referred pixels (row 0 at the top) as an 8-bit sRGB PNG."""
-    return save_png(path, to_srgb8(linear_rgb, alpha))
-
-
 def read_exr_layers(path: str | os.PathLike) -> dict[str, dict[str, np.ndarray]]:
     """Parts of a multilayer EXR: ``{part name: {channel name: float32 array (H, W)}}``."""
     import OpenEXR
