@@ -35,7 +35,7 @@ import numpy as np  # noqa: E402
 
 from layered_brdf_addon.model import spectral as sp  # noqa: E402
 from layered_brdf_addon.model.brdf import diffuse_rho, specular_brdf  # noqa: E402
-from layered_brdf_addon.model.closures import closure_shading, single_lobe_shading  # noqa: E402
+from layered_brdf_reference.closures import closure_shading, single_lobe_shading  # noqa: E402
 from layered_brdf_addon.model.geometry import dot, reflect, refract  # noqa: E402
 from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams  # noqa: E402
 from layered_brdf_addon.model.presets import PRESETS  # noqa: E402

@@ -1,7 +1,7 @@
 """Directional albedo of the exact model per preset: where and by how much it exceeds 1.
 
 The white-furnace value of a surface point seen from ``v`` is the integral of
-``f(l, v) <n0, l>`` over the hemisphere (Monte Carlo, see model/lighting.py).  The
+``f(l, v) <n0, l>`` over the hemisphere (Monte Carlo, see layered_brdf_reference/lighting.py).  The
 interference term adds up to ``2 sqrt(R T)`` and the paper's model does not conserve
 energy: this prints the largest albedo over thickness and view angle.
 """
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from layered_brdf_addon.model import PRESETS, preset
-from layered_brdf_addon.model.lighting import environment_shading
+from layered_brdf_reference.lighting import environment_shading
 
 
 def albedo_table(names, samples=4096, thicknesses=24, angles=(0.0, 30.0, 60.0)):

@@ -15,13 +15,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from layered_brdf_addon import cli
-from layered_brdf_addon.batch import load_job_file, request_from_options
-from layered_brdf_addon.gallery import label_lines, layout_for
+from layered_brdf_addon.cli import commands as cli
+from layered_brdf_addon.cli.codecs import read_exr_layers, srgb_encode, to_srgb8
+from layered_brdf_addon.cli.commands import format_table
+from layered_brdf_addon.cli.gallery import label_lines, layout_for
+from layered_brdf_addon.cli.job_files import load_job_file
+from layered_brdf_addon.cli.requests import request_from_options
+from layered_brdf_addon.cli.sidecar import read_sidecar
+from layered_brdf_addon.cli.staging import OutputPaths, StagedOutputs, stale_temps, temp_path
 from layered_brdf_addon.model.params import PARAM_SPECS, LayeredParams, ParameterError
 from layered_brdf_addon.model.presets import PAPER_PRESETS, preset
-from layered_brdf_addon.outputs import (OutputPaths, StagedOutputs, format_table, read_exr_layers, read_sidecar,
-                                        srgb_encode, stale_temps, temp_path, to_srgb8)
 
 TIMEOUT = 240
 
@@ -213,10 +216,10 @@ def test_bad_job_file_exits_2(tmp_path):
 @pytest.mark.slow
 def test_render_writes_png_exr_sidecar_that_predict_the_pixels(tmp_path):
     from layered_brdf_addon.blender.scene import passes_from_exr
-    from layered_brdf_addon.model.closures import closure_shading
-    from layered_brdf_addon.model.compare import agreement, lit_mask
+    from layered_brdf_reference.closures import closure_shading
+    from layered_brdf_reference.compare import agreement, lit_mask
     from layered_brdf_addon.model.sphere import render_spheres
-    from layered_brdf_addon.outputs import scene_from_sidecar
+    from layered_brdf_addon.cli.sidecar import scene_from_sidecar
     from PIL import Image
 
     res = run_cli("render", "--preset", "fig6_medium", "--resolution", 64, "--sun", 0.6, -1, 0.4,

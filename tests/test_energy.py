@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.model import PRESETS, preset
-from layered_brdf_addon.model import closures as C
+from layered_brdf_reference import closures as C
 from layered_brdf_addon.model.geometry import dot
-from layered_brdf_addon.model.lighting import environment_shading
+from layered_brdf_reference.lighting import environment_shading
 from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model.sphere import lower_normal, sphere_geometry, thickness_field
 

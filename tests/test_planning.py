@@ -105,9 +105,9 @@ def test_thick_spectral_layers_drop_interference_thin_and_rgb_keep_it():
 def test_dropping_averaged_interference_changes_little_and_matches_closure_form(backend):
     """Past the cut-off the band-averaged image without the interference term stays within
     a few per cent of the full spectral shader (the cut-off is 1 CIEDE2000 on colour)."""
-    from layered_brdf_addon.model import closures as C
+    from layered_brdf_reference import closures as C
     from layered_brdf_addon.model import render_spheres
-    from layered_brdf_addon.model.compare import agreement, lit_mask
+    from layered_brdf_reference.compare import agreement, lit_mask
 
     p = preset("glazed_clay").replace(thickness_mode="height", d_min=9000.0, d_max=9500.0, accuracy="spectral32",
                                       r1_r=1.5, r1_g=1.5, r1_b=1.5, e0=20.0, e1=20.0)

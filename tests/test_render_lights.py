@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.model import preset
-from layered_brdf_addon.model.compare import relative_l1
+from layered_brdf_reference.compare import relative_l1
 from layered_brdf_addon.model.geometry import dot
-from layered_brdf_addon.model.lighting import area_light_shading, environment_shading
+from layered_brdf_reference.lighting import area_light_shading, environment_shading
 from layered_brdf_addon.model.sphere import Sun, sphere_geometry, thickness_field
 
 pytestmark = pytest.mark.slow

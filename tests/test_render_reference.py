@@ -4,9 +4,9 @@ from functools import partial
 import numpy as np
 import pytest
 
-from layered_brdf_addon.model import closures as C
+from layered_brdf_reference import closures as C
 from layered_brdf_addon.model import preset, render_spheres
-from layered_brdf_addon.model.compare import agreement, centroids, highlight_mask, lit_mask, relative_l1
+from layered_brdf_reference.compare import agreement, centroids, highlight_mask, lit_mask, relative_l1
 from layered_brdf_addon.model.sphere import exact_shading
 
 from render_helpers import render_row

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.model import preset
-from layered_brdf_addon.model import closures as C
+from layered_brdf_reference import closures as C
 from layered_brdf_addon.model.spectral import shader_tables
 from layered_brdf_addon.model.spectral_tables import PATH, SAMPLE_COUNTS
 from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
@@ -41,7 +41,7 @@ MODES = ("spectral4", "spectral8", "spectral16", "spectral32")
 @pytest.mark.parametrize("kd", [0.0, 0.5])
 def test_spectral_shaders_match_closure_form(backend, kd):
     """Every spectral mode, dispersive (Fig. 6) and not, in one render per backend and diffuse weight."""
-    from layered_brdf_addon.model.compare import agreement, lit_mask
+    from layered_brdf_reference.compare import agreement, lit_mask
 
     from render_helpers import render_row
 

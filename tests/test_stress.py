@@ -8,9 +8,9 @@ fed with the render's own thickness where numpy cannot compute it.
 import numpy as np
 import pytest
 
-from layered_brdf_addon.model import closures as C
+from layered_brdf_reference import closures as C
 from layered_brdf_addon.model import preset, render_spheres
-from layered_brdf_addon.model.compare import agreement, lit_mask
+from layered_brdf_reference.compare import agreement, lit_mask
 from layered_brdf_addon.model.geometry import dot
 from layered_brdf_addon.model.sphere import Sun
 

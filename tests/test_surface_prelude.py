@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.model import preset, render_spheres
-from layered_brdf_addon.model.closures import closure_shading
-from layered_brdf_addon.model.compare import agreement, lit_mask
+from layered_brdf_reference.closures import closure_shading
+from layered_brdf_reference.compare import agreement, lit_mask
 
 from render_helpers import SUN_40
 

@@ -23,8 +23,8 @@ from layered_brdf_addon.blender import scene as S
 from layered_brdf_addon.blender import material as M
 from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.model import LayeredParams, preset, render_spheres
-from layered_brdf_addon.model.closures import closure_shading
-from layered_brdf_addon.model.compare import agreement, lit_mask
+from layered_brdf_reference.closures import closure_shading
+from layered_brdf_reference.compare import agreement, lit_mask
 from layered_brdf_addon.model.params import PARAM_SPECS, iter_sockets
 from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model.presets import PRESETS

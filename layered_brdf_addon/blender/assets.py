@@ -14,6 +14,7 @@ import bpy
 from ..model.plan import EffectPlan
 from . import material as M
 from ..backends import node_group as node_group_builder
+from .scene import render_to_file
 
 CATALOG_ID = "4b0f3f52-5d0c-4c55-9d2e-6b8d1c1f7a21"  # "Layered BRDF"
 CATALOG_PATH = "Layered BRDF"
@@ -130,8 +131,6 @@ def render_preview(group, size: int = PREVIEW_SIZE) -> None:
         r.film_transparent = True
         r.threads_mode = "FIXED"
         r.threads = 2
-        r.filepath = path
-        r.use_file_extension = False
         r.image_settings.file_format = "PNG"
         r.image_settings.color_mode = "RGBA"
         scene.view_settings.view_transform = "Standard"
@@ -141,7 +140,7 @@ def render_preview(group, size: int = PREVIEW_SIZE) -> None:
         c.use_adaptive_sampling = False
         c.use_denoising = False
         c.max_bounces = 1
-        bpy.ops.render.render(write_still=True, scene=scene.name)
+        render_to_file(path, scene)
         image = bpy.data.images.load(path)
         created.append(image)
         pixels = np.empty(size * size * 4, dtype=np.float32)

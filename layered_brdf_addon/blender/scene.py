@@ -217,35 +217,51 @@ def passes_from_exr(path) -> Passes:
     return Passes(beauty, normal, thick, *aovs)
 
 
-def render_to_exr(path, scene=None) -> float:
-    """Render the scene's camera to a multilayer float EXR; returns the render seconds.
+def render_to_file(path, scene=None, guard=None) -> float:
+    """Render the scene's camera and save the result with the scene's output settings.
 
-    The file is written under a temporary name and renamed when complete.
+    The add-on's one render call: the tests, ``render``, ``gallery`` and the asset previews
+    all render through it.  The file is written under a temporary name and renamed when
+    complete.  With an :class:`~layered_brdf_addon.cli.staging.InterruptGuard`, a signal
+    during the render stops it at once and the write holds the guard's I/O lock, so an
+    interrupt waits for a complete file.  Returns the render seconds.
     """
+    import contextlib
     import time
 
     scene = scene or bpy.context.scene
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.partial{os.getpid()}.exr")
+    tmp = path.with_name(f".{path.stem}.partial{os.getpid()}{path.suffix}")
+    t0 = time.perf_counter()
+    try:
+        bpy.ops.render.render(write_still=False, scene=scene.name)
+        seconds = time.perf_counter() - t0
+        if guard is not None:
+            guard.check()
+        result = bpy.data.images.get("Render Result")
+        if result is None:
+            raise RuntimeError("Blender produced no render result")
+        with guard.io() if guard is not None else contextlib.nullcontext():
+            result.save_render(filepath=str(tmp), scene=scene)
+            if not tmp.exists():
+                raise RuntimeError(f"Blender did not write {tmp}")
+            os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return seconds
+
+
+def render_to_exr(path, scene=None, guard=None) -> float:
+    """Render the scene's camera to a multilayer float EXR (every pass); see :func:`render_to_file`."""
+    scene = scene or bpy.context.scene
     s = scene.render.image_settings
     s.media_type = "MULTI_LAYER_IMAGE"  # Blender 5: multilayer EXR
     s.file_format = "OPEN_EXR_MULTILAYER"
     s.color_depth = "32"
     s.exr_codec = "ZIP"
-    scene.render.filepath = str(tmp)
-    scene.render.use_file_extension = False
-    t0 = time.perf_counter()
-    try:
-        bpy.ops.render.render(write_still=True)
-        seconds = time.perf_counter() - t0
-        if not tmp.exists():
-            raise RuntimeError(f"Blender did not write {tmp}")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return seconds
+    return render_to_file(path, scene, guard)
 
 
 def render_passes(scene=None, keep: str | os.PathLike | None = None) -> Passes:

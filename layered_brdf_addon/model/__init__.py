@@ -1,4 +1,4 @@
-"""The bpy-free core: the layered BRDF, its closure form, parameters and presets."""
+"""The bpy-free core: the layered BRDF, parameters, presets, the shading program and the effect policy."""
 from .brdf import (average_refracted_cosine, diffuse_rd, diffuse_rho, diffuse_td, fresnel_f0, layered_brdf,
                    phong_lobe, schlick, specular_brdf, specular_terms, transmission_factor)
 from .geometry import correlated_normal, reflect, refract, safe_normalize, tilted_normal

@@ -34,12 +34,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import ops_numpy, program
-from .brdf import diffuse_rho, specular_brdf
-from .geometry import dot, safe_normalize
-from .params import WAVELENGTHS_NM, LayeredParams
-from .plan import EffectPlan
-from .policy import plan_effects
+from layered_brdf_addon.model import ops_numpy, program
+from layered_brdf_addon.model.brdf import diffuse_rho, specular_brdf
+from layered_brdf_addon.model.geometry import dot, safe_normalize
+from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
+from layered_brdf_addon.model.plan import EffectPlan
+from layered_brdf_addon.model.policy import plan_effects
 
 INV_2PI = 0.5 / np.pi
 

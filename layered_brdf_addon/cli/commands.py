@@ -1,4 +1,4 @@
-"""Command line: ``python -m layered_brdf_addon [gallery|render|batch] ...``.
+"""The command line: ``python -m layered_brdf_addon [gallery|render|batch] ...``.
 
 ``gallery`` (the default) renders the paper's Figs. 3-6 as one contact sheet;
 ``render`` renders one material on the reference sphere or on an object of a .blend;
@@ -15,11 +15,12 @@ import argparse
 import contextlib
 import sys
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import Any, Iterable, Iterator, Sequence
 
-from . import __version__
-from .model.params import PARAM_SPECS, ParameterError, ParamSpec
-from .model.presets import ARTIST_PRESETS, PAPER_PRESETS
+from .. import __version__
+from ..model import policy
+from ..model.params import PARAM_SPECS, ParameterError, ParamSpec
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 
 PROG = "layered-brdf"
 COMMANDS = ("gallery", "render", "batch")
@@ -81,7 +82,7 @@ def add_param_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _add_scene_options(p: argparse.ArgumentParser, samples_help: str) -> None:
-    p.add_argument("--backend", choices=("nodes", "osl"), default=None,
+    p.add_argument("--backend", choices=policy.BACKENDS, default=None,
                    help="shader backend: the generated node group (default) or the OSL script")
     p.add_argument("--samples", default=None, metavar="N", help=samples_help)
     p.add_argument("--sun", nargs=3, default=None, metavar=("X", "Y", "Z"),
@@ -155,6 +156,35 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def format_table(headers: Sequence[str], rows: Iterable[Sequence[Any]], max_width: int | None = None) -> str:
+    """A plain-text table; with ``max_width`` the last column is cut to keep lines that short."""
+    rows = [[str(c) for c in r] for r in rows]
+    widths = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(headers)]
+    fixed = sum(widths[:-1]) + 2 * (len(headers) - 1)
+    if max_width is not None:
+        widths[-1] = max(len(headers[-1]), min(widths[-1], max_width - fixed))
+
+    def line(cells):
+        out = []
+        for i, (c, w) in enumerate(zip(cells, widths)):
+            if i == len(cells) - 1:
+                out.append(c if len(c) <= w else c[: max(1, w - 1)] + "\u2026")
+            else:
+                out.append(c.rjust(w) if _numeric(c) else c.ljust(w))
+        return "  ".join(out).rstrip()
+
+    sep = "  ".join("-" * (w if i < len(widths) - 1 else min(w, 40)) for i, w in enumerate(widths))
+    return "\n".join([line(list(headers)), sep] + [line(r) for r in rows])
+
+
+def _numeric(s: str) -> bool:
+    try:
+        float(s)
+        return True
+    except ValueError:
+        return False
+
+
 # ---------------------------------------------------------------------------
 @contextlib.contextmanager
 def blender_output(verbose: bool) -> Iterator[None]:
@@ -185,7 +215,9 @@ def _options(ns: argparse.Namespace, names: Sequence[str]) -> dict[str, Any]:
 
 def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``render``: validate, then render one request in this process."""
-    from .batch import RUN_OPTIONS, PARAM_NAMES, execute_render, follow_parent, request_from_options
+    from .render_job import execute_render
+    from .requests import PARAM_NAMES, RUN_OPTIONS, request_from_options
+    from .runner import follow_parent
 
     follow_parent()
     req = request_from_options(_options(ns, RUN_OPTIONS + PARAM_NAMES))
@@ -201,7 +233,6 @@ def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``gallery``: render the paper's configurations into one labelled contact sheet."""
     from .gallery import render_gallery, settings_from_options, summary_rows
-    from .outputs import format_table
 
     s = settings_from_options(_options(ns, ("output", "size", "samples", "backend", "columns", "sun",
                                             "sun_strength", "seed", "threads", "presets")))
@@ -218,8 +249,11 @@ def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_batch(ns: argparse.Namespace) -> int:
     """``batch``: run the jobs of a job file and print a summary table."""
-    from .batch import float_option, int_option, exit_code, load_job_file, run_batch
-    from .outputs import StagedOutputs, format_table, write_json
+    from .job_files import load_job_file
+    from .requests import float_option, int_option
+    from .runner import exit_code, run_batch
+    from .sidecar import write_json
+    from .staging import StagedOutputs
 
     n_jobs = int_option("jobs", ns.jobs, 1, 4096)
     if ns.scheduler is not None and n_jobs > 1:

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .geometry import dot
+from layered_brdf_addon.model.geometry import dot
 
 
 @dataclass

@@ -7,7 +7,6 @@ tiles, which are cut out and labelled with the preset's name and key parameters.
 from __future__ import annotations
 
 import math
-import socket
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,10 +14,14 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .model.params import LayeredParams, ParameterError
-from .model.policy import plan_effects
-from .model.presets import PAPER_PRESETS, preset
-from .outputs import OutputPaths, camera_to_dict, output_stem, sun_to_dict
+from ..model import policy
+from ..model.params import LayeredParams, ParameterError
+from ..model.policy import plan_effects
+from ..model.presets import PAPER_PRESETS, preset
+from .codecs import to_srgb8
+from .requests import check_output, float_option, int_option, parse_sun
+from .sidecar import camera_to_dict, sun_to_dict
+from .staging import OutputPaths, output_stem
 
 SPACING = 2.2  # centre distance of neighbouring spheres (unit radius): a 10% margin per tile
 DEFAULT_SIZE = 128
@@ -138,7 +141,7 @@ def grid_centers(layout: GalleryLayout) -> tuple[tuple[float, float, float], ...
 
 def grid_camera(layout: GalleryLayout):
     """The orthographic camera that gives every sphere a ``size`` x ``size`` pixel cell."""
-    from .model.sphere import OrthoCamera
+    from ..model.sphere import OrthoCamera
 
     return OrthoCamera(view=(0.0, -1.0, 0.0), ortho_scale=SPACING * max(layout.columns, layout.rows),
                        width=layout.columns * layout.size, height=layout.rows * layout.size)
@@ -181,7 +184,7 @@ class GallerySettings:
     presets: tuple[str, ...] = tuple(PAPER_PRESETS)
 
     def sun_light(self):
-        from .model.sphere import Sun
+        from ..model.sphere import Sun
 
         default = Sun()
         return Sun(direction=self.sun or default.direction,
@@ -190,14 +193,11 @@ class GallerySettings:
 
 def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     """Validate gallery options (``output``, ``size``, ``samples``, ``backend``, ...) without Blender."""
-    from .batch import BACKENDS, check_output, float_option, int_option, parse_sun
-
     o = {k: v for k, v in options.items() if v is not None}
     size = int_option("size", o.get("size", DEFAULT_SIZE), 16, 4096)
     samples = int_option("samples", o.get("samples", DEFAULT_SAMPLES), 1, 1_000_000)
     backend = o.get("backend", "nodes")
-    if backend not in BACKENDS:
-        raise ParameterError("backend", backend, "one of " + ", ".join(repr(b) for b in BACKENDS))
+    policy.check_backend(backend)
     columns = int_option("columns", o["columns"], 1, 64) if "columns" in o else None
     sun = parse_sun(o["sun"]) if "sun" in o else None
     strength = float_option("sun_strength", o["sun_strength"], 0.0, 1e6) if "sun_strength" in o else None
@@ -207,9 +207,10 @@ def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     if not names or len(set(names)) != len(names):
         raise ParameterError("presets", list(names), "distinct preset names")
     for name in names:
-        params = preset(name)
-        if backend == "nodes" and params.lobe != "beckmann":
-            raise ParameterError("lobe", params.lobe, f"'beckmann' with the node backend (preset {name})")
+        try:
+            policy.check_backend(backend, preset(name).lobe)
+        except ParameterError as e:
+            raise ParameterError(e.name, e.value, f"{e.allowed} (preset {name})") from None
     output = check_output(o.get("output", DEFAULT_OUTPUT))
     return GallerySettings(output=output, size=size, samples=samples, backend=backend, columns=columns, sun=sun,
                            sun_strength=strength, seed=seed, threads=threads, presets=names)
@@ -244,17 +245,15 @@ def title_for(s: GallerySettings) -> str:
 def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
                    log: Callable[[str], None] | None = None) -> GalleryResult:
     """Render every preset of ``s`` in one scene and write the sheet, the EXR and a sidecar."""
-    from .outputs import InterruptGuard, StagedOutputs, exr_beauty, to_srgb8, write_json
+    from .render_job import render_outputs, sidecar
+    from .staging import InterruptGuard
 
     t_start = time.perf_counter()
-    guard = InterruptGuard().arm()
-    try:
+    with InterruptGuard() as guard:
         import bpy
 
-        from . import __version__
-        from .blender import scene as S
-        from .blender.material import apply_layered_material
-        from .batch import render_exr
+        from ..blender import scene as S
+        from ..blender.material import apply_layered_material
 
         params = [preset(n) for n in s.presets]
         labels = [label_lines(n, p) for n, p in zip(s.presets, params)]
@@ -274,41 +273,27 @@ def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
             apply_layered_material(obj, p, s.backend, name=name)
         guard.check()
         paths = OutputPaths(output_stem(s.output))
-        with StagedOutputs(paths.all(), guard) as staged:
-            render_seconds = render_exr(staged.temp(paths.exr), scene, guard)
-            guard.check()
-            rgb, _ = exr_beauty(staged.temp(paths.exr))
-            sheet = compose_sheet(to_srgb8(rgb), layout, labels, title)
-            with guard.io():
-                sheet.save(str(staged.temp(paths.png)), format="PNG")
-            tiles = [GalleryTile(n, p, lab, layout.tile_box(k), centers[k])
-                     for k, (n, p, lab) in enumerate(zip(s.presets, params, labels))]
-            meta = {
-                "format": "layered-brdf render", "version": 1, "scene": "gallery",
-                "tiles": [{"name": t.name, "label": t.label, "box": t.box, "render_box": layout.render_box(k),
-                           "center": t.center, "params": t.params.to_dict(), "plan": plan_effects(t.params).key}
-                          for k, t in enumerate(tiles)],
-                "layout": {"columns": layout.columns, "rows": layout.rows, "size": layout.size,
-                           "label_height": layout.label_height, "title_height": layout.title_height,
-                           "sheet_size": layout.sheet_size},
-                "title": title, "backend": s.backend, "samples": s.samples, "seed": s.seed, "threads": s.threads,
-                "filter_width": scene.cycles.filter_width,
-                "camera": camera_to_dict(camera), "sun": sun_to_dict(sun), "centers": centers, "radius": 1.0,
-                "outputs": {"png": paths.png, "exr": paths.exr, "json": paths.json},
-                "exr_aovs": s.backend == "nodes",
-                "render_seconds": render_seconds, "total_seconds": time.perf_counter() - t_start,
-                "bpy_version": bpy.app.version_string, "layered_brdf_version": __version__,
-                "host": socket.gethostname(), "command": list(command) if command is not None else None,
-            }
-            with guard.io():
-                write_json(staged.temp(paths.json), meta)
-            guard.check()
-        total = time.perf_counter() - t_start
-        if log:
-            log(f"wrote {paths.png} ({layout.sheet_size[0]}x{layout.sheet_size[1]}), {paths.exr}, {paths.json}")
-        return GalleryResult(paths.png, paths.exr, paths.json, layout, tiles, render_seconds, total, meta)
-    finally:
-        guard.disarm()
+        tiles = [GalleryTile(n, p, lab, layout.tile_box(k), centers[k])
+                 for k, (n, p, lab) in enumerate(zip(s.presets, params, labels))]
+
+        def describe(render_seconds: float) -> dict[str, Any]:
+            return sidecar(
+                "gallery", scene, paths, backend=s.backend, camera=camera_to_dict(camera), sun=sun_to_dict(sun),
+                centers=centers, render_seconds=render_seconds, t_start=t_start, command=command,
+                tiles=[{"name": t.name, "label": t.label, "box": t.box, "render_box": layout.render_box(k),
+                        "center": t.center, "params": t.params.to_dict(), "plan": plan_effects(t.params).key}
+                       for k, t in enumerate(tiles)],
+                layout={"columns": layout.columns, "rows": layout.rows, "size": layout.size,
+                        "label_height": layout.label_height, "title_height": layout.title_height,
+                        "sheet_size": layout.sheet_size},
+                title=title, exr_aovs=s.backend == "nodes")
+
+        meta = render_outputs(scene, paths, guard, describe=describe,
+                              png=lambda rgb, _: np.asarray(compose_sheet(to_srgb8(rgb), layout, labels, title)))
+    total = time.perf_counter() - t_start
+    if log:
+        log(f"wrote {paths.png} ({layout.sheet_size[0]}x{layout.sheet_size[1]}), {paths.exr}, {paths.json}")
+    return GalleryResult(paths.png, paths.exr, paths.json, layout, tiles, meta["render_seconds"], total, meta)
 
 
 def summary_rows(result: GalleryResult) -> tuple[list[str], list[list[str]]]:

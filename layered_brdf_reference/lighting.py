@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .brdf import diffuse_rho, specular_brdf
-from .geometry import dot, reflect, safe_normalize
-from .params import WAVELENGTHS_NM, LayeredParams
+from layered_brdf_addon.model.brdf import diffuse_rho, specular_brdf
+from layered_brdf_addon.model.geometry import dot, reflect, safe_normalize
+from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
 
 
 def _frame(n):
@@ -50,7 +50,7 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
     mirror direction (2/3, exponent half the narrower of ``e0`` and ``e1 / r1^2``); the
     estimator divides by the mixture density, so it is unbiased for any parameters.
     ``shading(params, n0, n1, d, l, v)`` (pixel per unit irradiance from ``l``) replaces
-    the exact model, e.g. ``closures.closure_shading`` for a white-furnace prediction.
+    the exact model, e.g. :func:`layered_brdf_reference.closures.closure_shading` for a white-furnace prediction.
     """
     rng = np.random.default_rng(seed)
     n0 = np.asarray(n0, dtype=float)

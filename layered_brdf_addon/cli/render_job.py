@@ -1,0 +1,237 @@
+"""Rendering in this process (imports bpy): the one path of ``render`` and ``gallery``.
+
+:func:`render_outputs` renders a built scene (with
+:func:`layered_brdf_addon.blender.scene.render_to_exr`, the add-on's one render call)
+and writes ``STEM.exr``, ``STEM.png`` and the sidecar ``STEM.json`` together, under an
+:class:`~.staging.InterruptGuard`; :func:`sidecar` is the one builder of the sidecar.
+:func:`execute_render` renders a validated :class:`~.requests.RenderRequest`; the
+gallery (:mod:`.gallery`) builds its grid scene and calls :func:`render_outputs` too.
+"""
+from __future__ import annotations
+
+import platform
+import socket
+import time
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from .. import __version__
+from ..model.params import ParameterError
+from ..model.policy import plan_effects
+from .codecs import exr_beauty, replace_exr_layers, save_png, to_srgb8
+from .requests import RenderRequest
+from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dict, write_json
+from .staging import InterruptGuard, OutputPaths, StagedOutputs
+
+PNG_ENCODING = "8-bit sRGB, Blender's Standard view transform (clipped to [0, 1])"
+EXR_PASSES = ["Combined", "Normal", "layer_thickness", "lower_normal", "upper_normal"]
+
+
+def _open_blend(req: RenderRequest):
+    """Open the request's .blend; return (scene, target object)."""
+    import bpy
+
+    try:
+        bpy.ops.wm.open_mainfile(filepath=str(req.blend), load_ui=False)
+    except RuntimeError as e:
+        reason = str(e).strip().splitlines()[-1] if str(e).strip() else "Blender could not open it"
+        raise ParameterError("blend", str(req.blend), f"a .blend file Blender can open ({reason})") from None
+    scene = bpy.context.scene
+    obj = scene.objects.get(req.object)
+    if obj is None:
+        names = ", ".join(sorted(o.name for o in scene.objects))
+        raise ParameterError("object", req.object, f"the name of an object in {req.blend.name} "
+                             f"(scene '{scene.name}': {names[:400]})")
+    if scene.camera is None:
+        raise ParameterError("blend", str(req.blend), "a .blend whose scene has an active camera")
+    r = scene.render
+    r.engine = "CYCLES"
+    if req.resolution is not None:
+        r.resolution_x, r.resolution_y = req.resolution
+        r.resolution_percentage = 100
+    if req.threads is not None:
+        r.threads_mode = "FIXED"
+        r.threads = req.threads
+    c = scene.cycles
+    if req.samples is not None:
+        c.samples = req.samples
+    c.seed = req.seed
+    c.use_animated_seed = False
+    if req.backend == "osl":
+        c.device = "CPU"
+        c.shading_system = True
+    from ..blender.scene import ensure_passes
+
+    ensure_passes(scene)
+    return scene, obj
+
+
+def _blend_camera_dict(scene) -> dict[str, Any]:
+    cam = scene.camera
+    r = scene.render
+    d = {"type": cam.data.type, "name": cam.name, "matrix_world": [list(row) for row in cam.matrix_world],
+         "width": r.resolution_x * r.resolution_percentage // 100,
+         "height": r.resolution_y * r.resolution_percentage // 100,
+         "sensor_fit": cam.data.sensor_fit, "sensor_width": cam.data.sensor_width,
+         "sensor_height": cam.data.sensor_height, "clip_start": cam.data.clip_start, "clip_end": cam.data.clip_end}
+    if cam.data.type == "ORTHO":
+        d["ortho_scale"] = cam.data.ortho_scale
+    else:
+        d["lens"] = cam.data.lens
+    return d
+
+
+def _blend_lights(scene) -> list[dict[str, Any]]:
+    from mathutils import Vector
+
+    out = []
+    for o in scene.objects:
+        if o.type == "LIGHT" and not o.hide_render:
+            d = {"name": o.name, "type": o.data.type, "energy": o.data.energy, "color": list(o.data.color),
+                 "matrix_world": [list(row) for row in o.matrix_world]}
+            if o.data.type == "SUN":
+                d["direction"] = list((o.matrix_world.to_3x3() @ Vector((0.0, 0.0, 1.0))).normalized())
+                d["angle"] = o.data.angle
+            out.append(d)
+    return out
+
+
+def _osl_aov_layers(scene, guard) -> dict[str, dict[str, Any]]:
+    """The AOVs of an OSL render (Cycles writes none under OSL), from emission renders.
+
+    Their temporary files go to a private folder that an interrupt removes.
+    """
+    import shutil
+    import tempfile
+
+    from ..blender import scene as S
+    from ..blender.material import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL
+
+    private = tempfile.mkdtemp(prefix="layered_brdf_aov_")
+    cleanup = lambda: shutil.rmtree(private, ignore_errors=True)  # noqa: E731
+    guard.add_cleanup(cleanup)
+    saved = tempfile.tempdir
+    tempfile.tempdir = private
+    try:
+        p = S.render_passes_osl(scene)
+    finally:
+        tempfile.tempdir = saved
+        cleanup()
+        guard.remove_cleanup(cleanup)
+    one = np.ones(p.thickness.shape)
+    return {AOV_THICKNESS: {"X": p.thickness},
+            AOV_LOWER_NORMAL: {"R": p.lower_normal[..., 0], "G": p.lower_normal[..., 1],
+                               "B": p.lower_normal[..., 2], "A": one},
+            AOV_UPPER_NORMAL: {"R": p.upper_normal[..., 0], "G": p.upper_normal[..., 1],
+                               "B": p.upper_normal[..., 2], "A": one}}
+
+
+def sidecar(kind: str, scene, paths: OutputPaths, *, backend: str, camera: Mapping[str, Any],
+            sun: Mapping[str, Any] | None, centers, render_seconds: float, t_start: float,
+            command: Sequence[str] | None, **fields: Any) -> dict[str, Any]:
+    """The sidecar of a render: what ``kind`` of scene (reference, blend, gallery), its
+    ``fields`` (material, layout, ...), then what every render records: backend, sampling,
+    camera, sun, sphere centres, outputs, timing and versions."""
+    import bpy
+
+    return {
+        "format": SIDECAR_FORMAT, "version": SIDECAR_VERSION, "scene": kind, **fields,
+        "backend": backend,
+        "samples": scene.cycles.samples, "seed": scene.cycles.seed,
+        "threads": scene.render.threads, "filter_width": scene.cycles.filter_width,
+        "camera": camera, "sun": sun, "centers": centers, "radius": 1.0 if centers else None,
+        "outputs": {"png": paths.png, "exr": paths.exr, "json": paths.json},
+        "png_encoding": PNG_ENCODING,
+        "render_seconds": render_seconds, "total_seconds": time.perf_counter() - t_start,
+        "bpy_version": bpy.app.version_string, "layered_brdf_version": __version__,
+        "host": socket.gethostname(), "python": platform.python_version(),
+        "command": list(command) if command is not None else None,
+    }
+
+
+def render_outputs(scene, paths: OutputPaths, guard: InterruptGuard, *,
+                   png: Callable[[np.ndarray, np.ndarray | None], np.ndarray],
+                   describe: Callable[[float], dict[str, Any]], osl_aovs: bool = False) -> dict[str, Any]:
+    """Render ``scene`` and write ``paths`` (EXR, PNG, sidecar) together; return the sidecar.
+
+    ``png(rgb, alpha)`` turns the linear beauty pass into 8-bit pixels; ``describe(render
+    seconds)`` gives the sidecar.  ``osl_aovs`` adds the AOVs that Cycles does not write
+    under OSL (rendered as emission passes, counted in the render time).
+    """
+    from ..blender.scene import render_to_exr
+
+    with StagedOutputs(paths.all(), guard) as staged:
+        exr_tmp = staged.temp(paths.exr)
+        t_render = time.perf_counter()
+        render_to_exr(exr_tmp, scene, guard)
+        if osl_aovs:
+            layers = _osl_aov_layers(scene, guard)
+            guard.check()
+            with guard.io():
+                replace_exr_layers(exr_tmp, layers)
+        render_seconds = time.perf_counter() - t_render
+        guard.check()
+        rgb, alpha = exr_beauty(exr_tmp)
+        pixels = png(rgb, alpha)
+        with guard.io():
+            save_png(staged.temp(paths.png), pixels)
+        guard.check()
+        data = describe(render_seconds)
+        with guard.io():
+            write_json(staged.temp(paths.json), data)
+        guard.check()
+    return data
+
+
+def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
+                   log: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Render ``req`` in this process; write ``STEM.exr``, ``STEM.png`` and ``STEM.json``.
+
+    The three files appear together (written under temporary names, renamed when all
+    are complete); SIGINT and SIGTERM stop the render at once and leave no file
+    behind (exit code 130).  Returns the sidecar.
+    """
+    t_start = time.perf_counter()
+    with InterruptGuard() as guard:
+        import bpy
+
+        from ..blender import scene as S
+        from ..blender.material import apply_layered_material
+
+        guard.arm()
+        guard.check()
+        if req.blend is not None:
+            scene, target = _open_blend(req)
+            camera_info, sun_info, centers = _blend_camera_dict(scene), None, None
+        else:
+            S.reset_blender()
+            camera, sun = req.camera(), req.sun_light()
+            centers = ((0.0, 0.0, 0.0),)
+            spec = S.SceneSpec(camera=camera, sun=sun, centers=centers, samples=req.samples,
+                               threads=req.threads, seed=req.seed, osl=(req.backend == "osl"))
+            target = S.build_scene(spec)[0]
+            scene = bpy.context.scene
+            camera_info, sun_info = camera_to_dict(camera), sun_to_dict(sun)
+        guard.arm()
+        guard.check()
+        apply_layered_material(target, req.params, req.backend)
+        guard.check()
+        paths = req.paths
+        plan = plan_effects(req.params)
+
+        def describe(render_seconds: float) -> dict[str, Any]:
+            return sidecar(
+                "blend" if req.blend else "reference", scene, paths, backend=req.backend, camera=camera_info,
+                sun=sun_info, centers=centers, render_seconds=render_seconds, t_start=t_start, command=command,
+                name=req.name, preset=req.preset, params_file=req.params_file, overrides=dict(req.overrides),
+                params=req.params.to_dict(), plan={**plan.to_dict(), "key": plan.key, "describe": plan.describe()},
+                blend=req.blend, object=req.object, lights=_blend_lights(scene) if req.blend else None,
+                exr_passes=EXR_PASSES)
+
+        transparent = scene.render.film_transparent
+        data = render_outputs(scene, paths, guard, png=lambda rgb, a: to_srgb8(rgb, a if transparent else None),
+                              describe=describe, osl_aovs=req.backend == "osl")
+    if log:
+        log(f"wrote {paths.png}, {paths.exr}, {paths.json} (render {data['render_seconds']:.2f} s)")
+    return data

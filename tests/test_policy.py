@@ -1,0 +1,145 @@
+"""The policy module: backends and their lobes, and effect planning with animated parameters.
+
+An animated parameter (keyframed, driven or linked) may take any value of its range on some
+frame, so the planner keeps every effect it could switch on; the render test checks that
+a thick spectral layer animated down to a thin one keeps its interference colours.
+"""
+from __future__ import annotations
+
+from functools import partial
+
+import numpy as np
+import pytest
+
+from layered_brdf_addon.model import preset
+from layered_brdf_addon.model.params import ParameterError
+from layered_brdf_addon.model.policy import (BACKENDS, DECIDING_PARAMETERS, LOBES_BY_BACKEND, check_backend,
+                                             plan_effects)
+
+BASE = preset("fig4_parallel")
+THICK = 8000.0  # nm: past the band-averaging cut-off for r1 ~ 1.4 (optical ~ 7,800 nm > 4,146 nm)
+THIN = 200.0
+
+# For each effect, parameters that switch it off, and how the plan shows whether it is on.
+OFF = {
+    "specular": (BASE.replace(ks=0.0), lambda plan: plan.specular),
+    "diffuse": (BASE.replace(kd=0.0), lambda plan: plan.diffuse),
+    "thickness": (BASE.replace(d_min=70.0, d_max=70.0), lambda plan: plan.thickness != "constant"),
+    "tilt": (BASE.replace(normal_mode="tilted", tilt=0.0), lambda plan: plan.normals == "tilted"),
+    "bump": (BASE.replace(normal_mode="correlated", bump_strength=0.0), lambda plan: plan.normals == "correlated"),
+    "dispersion": (BASE.replace(r1_r=1.45, r1_g=1.45, r1_b=1.45), lambda plan: plan.dispersion),
+    "interference": (BASE.replace(accuracy="spectral16", d_min=THICK, d_max=THICK),
+                     lambda plan: plan.interference),
+}
+DECIDING = [(effect, name) for effect, names in DECIDING_PARAMETERS.items() for name in names]
+
+
+def test_every_effect_has_a_case():
+    assert set(OFF) == set(DECIDING_PARAMETERS)
+
+
+@pytest.mark.parametrize("effect,name", DECIDING, ids=[f"{e}-{n}" for e, n in DECIDING])
+def test_an_animated_deciding_parameter_keeps_its_effect(effect, name):
+    params, on = OFF[effect]
+    assert not on(plan_effects(params)), "the case must switch the effect off when nothing is animated"
+    assert on(plan_effects(params, {name}))
+    assert on(plan_effects(params, set(DECIDING_PARAMETERS[effect])))
+
+
+@pytest.mark.parametrize("effect", sorted(OFF))
+def test_animating_other_parameters_changes_nothing(effect):
+    params, _ = OFF[effect]
+    others = {"e0", "e1", "noise_scale", "noise_phase", "base_r", "tilt_azimuth"}
+    assert plan_effects(params, others) == plan_effects(params)
+
+
+def test_animation_only_adds_effects():
+    """Planning with every socket animated gives the fullest shader the enums allow."""
+    every = {name for names in DECIDING_PARAMETERS.values() for name in names}
+    for params, _ in OFF.values():
+        still, moving = plan_effects(params), plan_effects(params, every)
+        assert moving.specular >= still.specular and moving.diffuse >= still.diffuse
+        assert moving.dispersion >= still.dispersion and moving.interference >= still.interference
+        assert (moving.lobe, moving.spectral) == (still.lobe, still.spectral)
+
+
+def test_backends_and_lobes():
+    assert set(LOBES_BY_BACKEND) == set(BACKENDS)
+    for backend in BACKENDS:
+        for lobe in LOBES_BY_BACKEND[backend]:
+            check_backend(backend, lobe)
+    with pytest.raises(ParameterError) as e:
+        check_backend("eevee")
+    assert e.value.name == "backend"
+    with pytest.raises(ParameterError, match="osl backend") as e:
+        check_backend("nodes", "phong")
+    assert e.value.name == "lobe"
+
+
+def test_command_line_offers_the_policy_backends():
+    from layered_brdf_addon.cli import commands
+
+    parser = commands.build_parser()
+    for command in ("render", "gallery"):
+        ns = parser.parse_args([command, "--backend", BACKENDS[-1]])
+        assert ns.backend == BACKENDS[-1]
+        with pytest.raises(SystemExit):
+            parser.parse_args([command, "--backend", "eevee"])
+
+
+@pytest.mark.slow
+def test_thick_layer_keyframed_thin_keeps_interference_on_both_frames():
+    """A spectral layer so thick that interference averages out, keyframed down to a thin one
+    on frame 2: re-applying keeps interference in the shader (the thickness sockets are
+    animated), and both frames render as the closure form of that shader predicts."""
+    import bpy
+
+    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.material import animated_parameters, apply_layered_material, shader_node
+    from layered_brdf_reference.closures import closure_shading
+    from layered_brdf_reference.compare import agreement, lit_mask
+    from layered_brdf_addon.model.sphere import render_spheres
+    from render_helpers import SUN_40
+
+    p = BASE.replace(accuracy="spectral16", d_min=THICK, d_max=THICK)
+    dropped = plan_effects(p)
+    assert dropped.interference is False  # what a still thick layer gets
+    S.reset_blender()
+    cam = S.camera_for(1, 48)
+    centers = S.row_of_spheres(1)
+    [obj] = S.build_scene(S.SceneSpec(camera=cam, sun=SUN_40, centers=centers))
+    mat = apply_layered_material(obj, p, "nodes")
+    assert mat["layered_brdf_build"] == f"nodes:{dropped.key}:{p.base_layer}"
+    node = shader_node(mat)
+    frames = {1: THICK, 2: THIN}
+    for frame, d in frames.items():
+        for name in ("d_min", "d_max"):
+            node.inputs[name].default_value = d
+            node.inputs[name].keyframe_insert("default_value", frame=frame)
+    assert {"d_min", "d_max"} <= animated_parameters(mat)
+
+    bpy.context.view_layer.update()  # as after a keyframe in the UI (a rebuild before any update drops the
+    mat = apply_layered_material(obj, p, "nodes")  # animation); then what the panel does after a change
+    kept = plan_effects(p, {"d_min", "d_max"})
+    assert kept.interference is True
+    assert mat["layered_brdf_build"] == f"nodes:{kept.key}:{p.base_layer}"
+
+    scene = bpy.context.scene
+    shaded = partial(closure_shading, plan=kept)
+    without = partial(closure_shading, plan=dropped)
+    means = []
+    for frame, d in frames.items():
+        scene.frame_set(frame)
+        assert shader_node(mat).inputs["d_min"].default_value == pytest.approx(d)
+        beauty = S.render_passes().beauty
+        params = p.replace(d_min=d, d_max=d)
+        expected, geo = render_spheres([params], cam, SUN_40, centers, shading=shaded)
+        mask = lit_mask(geo, SUN_40.l)
+        ag = agreement(beauty, expected, mask, rel_tol=0.02)
+        assert ag.failing_fraction <= 0.01, f"frame {frame} (d = {d:g} nm): {ag}"
+        if d == THIN:  # the test tells the plans apart: without interference the thin frame is wrong
+            wrong, _ = render_spheres([params], cam, SUN_40, centers, shading=without)
+            assert agreement(beauty, wrong, mask, rel_tol=0.02).failing_fraction > 0.2
+        means.append(beauty[mask].mean(axis=0))
+    hue = [m / m.sum() for m in means]
+    assert np.abs(hue[0] - hue[1]).max() > 0.02, hue  # the thin frame has interference colours
