@@ -64,13 +64,13 @@ def test_package_holds_the_addon_and_nothing_else(package):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     names = zipfile.ZipFile(package).namelist()
     tops = {n.split("/")[0] for n in names}
-    assert tops == {"__init__.py", "blender_manifest.toml", "layered_brdf_addon", "node_groups", "osl"}, tops
+    assert tops == {"__init__.py", "blender_manifest.toml", "layered_brdf_addon", "osl"}, tops
     assert "osl/layered_brdf.osl" in names
     for required in ("layered_brdf_addon/blender/registration.py", "layered_brdf_addon/model/params.py",
-                     "node_groups/layered.py"):
+                     "layered_brdf_addon/backends/node_group.py"):
         assert required in names
     assert not [n for n in names if "__pycache__" in n or n.endswith((".pyc", ".blend1"))]
-    in_tree = {str(p.relative_to(ROOT)) for d in ("layered_brdf_addon", "node_groups")
+    in_tree = {str(p.relative_to(ROOT)) for d in ("layered_brdf_addon",)
                for p in (ROOT / d).rglob("*.py") if "__pycache__" not in p.parts}
     assert in_tree <= set(names)
 
