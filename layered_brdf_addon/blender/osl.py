@@ -8,6 +8,7 @@ from pathlib import Path
 import bpy
 
 from ..model.plan import EffectPlan
+from . import paths
 from ..model.spectral_tables import tables
 
 OSL_VERSION = 1
@@ -72,7 +73,7 @@ def text_for(plan: EffectPlan):
 
 
 def _ensure_oslquery():
-    path = os.path.join(bpy.utils.resource_path("LOCAL"), "python", "lib", "python3.11", "site-packages")
+    path = str(paths.osl_site_packages())
     if os.path.isdir(path) and path not in sys.path:
         sys.path.append(path)
 
