@@ -267,6 +267,7 @@ def preset_row(request):
 
 
 @pytest.mark.slow
+@pytest.mark.keeps_scene
 def test_every_preset_renders_like_the_closure_form(preset_row):
     r = preset_row
     params = [preset(n) for n in r.names]
