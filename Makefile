@@ -1,35 +1,66 @@
 # Two commands: `make demo` renders the gallery, `make test` runs the suite.
-# Both create .venv and install the pinned dependencies when needed.
-PYTHON ?= python3
-VENV := .venv
+# Both pick the newest supported Blender/Python pair on this machine -- Blender 5.2 LTS
+# (bpy 5.2.3) on Python 3.13 if a python3.13 runs (on PATH or through pyenv), else
+# Blender 5.0 (bpy 5.0.1) on Python 3.11 -- and create one venv per pair (.venv-5.2,
+# .venv-5.0), installing the pinned dependencies when needed.
+# Choose a pair with `make test BLENDER=5.0` (or 5.2); choose the interpreter with PYTHON=...
+
+# The first command that runs and reports the wanted version, as a real executable path
+# (pyenv's shims only run when a version is selected, so try pyenv's own versions too).
+find_python = $(shell for p in python$(1) $$(pyenv root 2>/dev/null)/versions/$(1)*/bin/python$(1) python3; do \
+    "$$p" -c 'import sys; sys.exit(sys.version_info[:2] != ($(subst .,$(comma),$(1))))' 2>/dev/null && \
+    { "$$p" -c 'import sys; print(sys.executable)'; break; }; done)
+comma := ,
+
+ifndef BLENDER
+  PYTHON313 := $(call find_python,3.13)
+  BLENDER := $(if $(PYTHON313),5.2,5.0)
+endif
+
+ifeq ($(BLENDER),5.2)
+  PYTHON ?= $(or $(PYTHON313),$(call find_python,3.13))
+else ifeq ($(BLENDER),5.0)
+  PYTHON ?= $(or $(call find_python,3.11),python3)
+else
+  $(error BLENDER=$(BLENDER): supported are 5.2 (Python 3.13) and 5.0 (Python 3.11))
+endif
+
+VENV := .venv-$(BLENDER)
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-$(shell cksum pyproject.toml | cut -d' ' -f1)
 EXT_ZIP = dist/layered_brdf-$(shell sed -n 's/^version *= *"\(.*\)"/\1/p' blender_manifest.toml).zip
+WHICH = $(PY) -c "import importlib.metadata as m, platform; \
+    print('Blender', m.version('bpy'), '(bpy) on Python', platform.python_version(), 'in $(VENV)')"
 
-.PHONY: demo test bench extension clean
+.PHONY: demo test bench extension clean which
 
 $(STAMP): pyproject.toml
+	@test -n "$(PYTHON)" || { echo "Blender $(BLENDER) needs Python $(if $(filter 5.2,$(BLENDER)),3.13,3.11), not found" >&2; exit 1; }
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[dev]"
 	rm -f $(VENV)/.installed-*
 	touch $(STAMP)
 
+which: $(STAMP)
+	@$(WHICH)
+
 demo: $(STAMP)
+	@$(WHICH)
 	$(PY) -m layered_brdf_addon
 
 test: $(STAMP)
-	$(PY) -m pytest
+	@$(WHICH)
+	$(PY) -m pytest $(PYTEST_ARGS)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reference.py
 
+# Blender's extension tool and its tags file are found in the installed bpy.
 extension: $(STAMP)
 	mkdir -p $(dir $(EXT_ZIP))
 	rm -f $(EXT_ZIP)
-	scripts="$$($(PY) -c "import bpy; print(bpy.utils.system_resource('SCRIPTS'))")" && \
-	tool="$$scripts/addons_core/bl_pkg/cli/blender_ext.py" && \
-	tags="$$scripts/modules/_bpy_internal/extensions/tags.py" && \
+	eval "$$($(PY) -m layered_brdf_addon.blender.paths --shell)" && \
 	$(PY) "$$tool" build --source-dir . --output-filepath $(EXT_ZIP) --valid-tags "$$tags" && \
 	$(PY) "$$tool" validate $(EXT_ZIP) --valid-tags "$$tags"
 

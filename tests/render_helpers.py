@@ -3,12 +3,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from layered_brdf_addon.model.sphere import OrthoCamera, Sun
 
-# The sun is 40 degrees off the view, above it: spheres in a row along x never shadow each other.
-SUN_40 = Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=1.0)
+from constants import SUN_40
 
 
 @dataclass

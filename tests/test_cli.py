@@ -26,6 +26,8 @@ from layered_brdf_addon.cli.staging import OutputPaths, StagedOutputs, stale_tem
 from layered_brdf_addon.model.params import PARAM_SPECS, LayeredParams, ParameterError
 from layered_brdf_addon.model.presets import PAPER_PRESETS, preset
 
+from constants import MAX_FAILING, REL_TOL
+
 TIMEOUT = 240
 
 
@@ -232,15 +234,17 @@ def test_render_writes_png_exr_sidecar_that_predict_the_pixels(tmp_path):
     assert side["plan"]["normals"] == "tilted" and side["backend"] == "nodes" and side["samples"] == 1
     assert side["camera"]["width"] == side["camera"]["height"] == 64 and len(side["camera"]["matrix_world"]) == 4
     assert side["sun"]["strength"] == 2.0 and side["sun"]["direction"] == [0.6, -1.0, 0.4]
-    assert side["bpy_version"].startswith("5.0") and side["render_seconds"] > 0
+    import bpy
+
+    assert side["bpy_version"] == bpy.app.version_string and side["render_seconds"] > 0
     passes = passes_from_exr(out / "sphere.exr")
     sc = scene_from_sidecar(side)
     expected, geo = render_spheres(sc.params, sc.camera, sc.sun, sc.centers, thickness=passes.thickness,
                                    prefer_analytic=True, shading=closure_shading)
     mask = lit_mask(geo, sc.sun.l)
     assert mask.sum() > 1000
-    ag = agreement(passes.beauty, expected, mask, rel_tol=0.02)
-    assert ag.failing_fraction <= 0.01, str(ag)
+    ag = agreement(passes.beauty, expected, mask, rel_tol=REL_TOL)
+    assert ag.failing_fraction <= MAX_FAILING, str(ag)
     png = np.asarray(Image.open(out / "sphere.png"))
     assert png.shape == (64, 64, 3)
     assert np.abs(png.astype(int) - to_srgb8(passes.beauty).astype(int)).max() <= 1

@@ -60,7 +60,8 @@ def test_manifest():
 
 def test_package_holds_the_addon_and_nothing_else(package):
     tool = _blender_ext()
-    proc = subprocess.run([sys.executable, str(tool), "validate", str(package)], capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, str(tool), "validate", str(package), "--valid-tags", str(_tags())],
+                          capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     names = zipfile.ZipFile(package).namelist()
     tops = {n.split("/")[0] for n in names}
@@ -76,9 +77,15 @@ def test_package_holds_the_addon_and_nothing_else(package):
 
 
 def _blender_ext() -> Path:
-    import bpy
+    from layered_brdf_addon.blender.paths import extension_tool
 
-    return Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"
+    return extension_tool()
+
+
+def _tags() -> Path:
+    from layered_brdf_addon.blender.paths import extension_tags
+
+    return extension_tags()
 
 
 @pytest.mark.slow

@@ -28,14 +28,11 @@ from layered_brdf_reference.compare import agreement, lit_mask
 from layered_brdf_addon.model.params import PARAM_SPECS, iter_sockets
 from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model.presets import PRESETS
-from layered_brdf_addon.model.sphere import Sun
 from layered_brdf_addon.backends import node_group as node_group_builder
 
+from constants import MAX_FAILING_COARSE as MAX_FAILING, REL_TOL_COARSE as REL_TOL, SUN_40 as SUN
+
 ROOT = Path(__file__).resolve().parents[1]
-# 40 degrees off the view, above it: spheres in a row along x don't shadow each other.
-SUN = Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=1.0)
-REL_TOL = 0.05
-MAX_FAILING = 0.02
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -267,6 +264,7 @@ def preset_row(request):
 
 
 @pytest.mark.slow
+@pytest.mark.keeps_scene
 def test_every_preset_renders_like_the_closure_form(preset_row):
     r = preset_row
     params = [preset(n) for n in r.names]

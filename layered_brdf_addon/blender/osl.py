@@ -9,6 +9,7 @@ import bpy
 
 from ..backends.osl_shader import shader_source
 from ..model.plan import EffectPlan
+from . import paths
 
 
 
@@ -30,7 +31,7 @@ def text_for(plan: EffectPlan):
 
 
 def _ensure_oslquery():
-    path = os.path.join(bpy.utils.resource_path("LOCAL"), "python", "lib", "python3.11", "site-packages")
+    path = str(paths.osl_site_packages())
     if os.path.isdir(path) and path not in sys.path:
         sys.path.append(path)
 
