@@ -32,7 +32,7 @@ EXT_ZIP = dist/layered_brdf-$(shell sed -n 's/^version *= *"\(.*\)"/\1/p' blende
 WHICH = $(PY) -c "import importlib.metadata as m, platform; \
     print('Blender', m.version('bpy'), '(bpy) on Python', platform.python_version(), 'in $(VENV)')"
 
-.PHONY: demo test bench extension clean which
+.PHONY: demo test bench extension clean which generated
 
 $(STAMP): pyproject.toml
 	@test -n "$(PYTHON)" || { echo "Blender $(BLENDER) needs Python $(if $(filter 5.2,$(BLENDER)),3.13,3.11), not found" >&2; exit 1; }
@@ -52,6 +52,10 @@ demo: $(STAMP)
 test: $(STAMP)
 	@$(WHICH)
 	$(PY) -m pytest $(PYTEST_ARGS)
+
+# Rewrite osl/layered_brdf.osl and node_groups/*.json from the shading program.
+generated: $(STAMP)
+	$(PY) -m layered_brdf_addon.backends.generated
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reference.py
