@@ -262,8 +262,25 @@ class NodeOps:
         return x
 
     def clamp_input(self, x, lo, hi):
-        """An input clamped to its parameter's range (a Clamp node)."""
-        return self.clamp(x, lo, hi)
+        """An input clamped to its parameter's range; NaN gives ``lo``.
+
+        ``Maximum(lo, x)`` first: Cycles' Maximum gives ``lo`` for a NaN ``x`` both when it
+        runs (a linked texture) and when it folds a constant (a driver's value) with ``lo``
+        as its first operand, where a Clamp node alone lets a folded NaN through.
+        """
+        return self.clamp(self.maximum(lo, x), lo, hi)
+
+    def abs(self, x):
+        return abs(x) if isinstance(x, Number) else self.math("ABSOLUTE", x)
+
+    def nan_to_zero(self, x):
+        """``x``, or 0 where it is NaN: ``Maximum(0, x) + Minimum(0, x)`` (see clamp_input)."""
+        return self.maximum(0.0, x) + self.minimum(0.0, x)
+
+    def components(self, v):
+        """The three scalars of a vector (Separate XYZ)."""
+        n, d = self.node("ShaderNodeSeparateXYZ", {"Vector": v})
+        return tuple(self.out(n, d, k, "float") for k in range(3))
 
     # sub-programs -----------------------------------------------------------
     def function(self, fn, values, settings):

@@ -273,6 +273,15 @@ class OslOps:
             self.body.by_token[x.token].hint = hint
         return x
 
+    def abs(self, x):
+        return abs(x) if isinstance(x, Number) else self.call_expr("abs", (x,), "float")
+
+    def nan_to_zero(self, x):
+        return self.call_expr("nan_to_zero", (x,), "float")
+
+    def components(self, v):
+        return tuple(self.emit("float", f"{self.use(v, PREC_ATOM)}[{k}]") for k in range(3))
+
     def clamp_input(self, x, lo, hi):
         """An input clamped to its parameter's range; NaN gives ``lo``."""
         return self.call_expr("clamp_input", (x, max(lo, -3.0e38), min(hi, 3.0e38)), "float")
@@ -378,10 +387,12 @@ class OslOps:
             tail = [(None, self.use(body.ret[1]))]
         # Names of locals; a parameter whose name a local takes over becomes NAME_in.
         params = {p.token for p in body.params}
+        named_here = set()  # a value bound to two locals keeps the first one's name
         for lname, v in local_names.items():
             if isinstance(v, Val) and v.token in body.by_token and v.token not in params \
-                    and not body.by_token[v.token].key_hint:
+                    and not body.by_token[v.token].key_hint and v.token not in named_here:
                 body.by_token[v.token].hint = lname
+                named_here.add(v.token)
         hints = {st.hint for st in body.statements}
         # An output that is a named statement of its own name is written to directly.
         out_targets = set()

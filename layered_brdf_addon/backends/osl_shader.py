@@ -89,6 +89,12 @@ float clamp_input(float x, float lo, float hi)
   return clamp(x, lo, hi);
 }
 
+/* x, or 0 where it is NaN. */
+float nan_to_zero(float x)
+{
+  return isnan(x) ? 0.0 : x;
+}
+
 /* Blender's Noise Texture node, 4D fBm, lacunarity 2, distortion 0, normalised:
  * p and w scaled by `scale`, then noise_fbm (node_noise_texture.osl). */
 float thickness_noise(vector p, float w, float scale, float detail, float roughness)

@@ -220,3 +220,18 @@ def clamp_input(x, lo, hi):
     """An input clamped to its parameter's range; NaN gives ``lo``."""
     x = np.asarray(x, dtype=float)
     return np.where(np.isnan(x), lo, np.clip(x, lo, hi))
+
+
+def nan_to_zero(x):
+    x = np.asarray(x, dtype=float)
+    return np.where(np.isnan(x), 0.0, x)
+
+
+
+def components(v):
+    v = _plain(v)
+    return v[..., 0], v[..., 1], v[..., 2]
+
+
+def abs(x):  # noqa: A001 - the ops interface's name
+    return np.abs(x)

@@ -510,6 +510,26 @@ def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan):
     return n0
 
 
+FLOAT_LIMIT = 1.0e38  # an infinite component of a direction input counts as this
+
+
+@shader_function
+def direction_input(ops, v):
+    """A direction from a socket, scaled by its largest component so that a huge but finite
+    vector keeps its direction (squaring it would overflow float32).  A vector with a NaN
+    component becomes 0, and so falls back wherever it is normalised; an infinite component
+    counts as the largest finite one."""
+    x, y, z = ops.components(v)
+    # "c < 1 or c > 0" holds for every number but NaN.
+    valid = (ops.gt(ops.lt(x, 1.0) + ops.gt(x, 0.0), 0.5) * ops.gt(ops.lt(y, 1.0) + ops.gt(y, 0.0), 0.5)
+             * ops.gt(ops.lt(z, 1.0) + ops.gt(z, 0.0), 0.5))
+    xs = ops.clamp(ops.nan_to_zero(x), -FLOAT_LIMIT, FLOAT_LIMIT)
+    ys = ops.clamp(ops.nan_to_zero(y), -FLOAT_LIMIT, FLOAT_LIMIT)
+    zs = ops.clamp(ops.nan_to_zero(z), -FLOAT_LIMIT, FLOAT_LIMIT)
+    largest = ops.maximum(ops.maximum(ops.abs(xs), ops.abs(ys)), ops.abs(zs))
+    return ops.combine(xs, ys, zs) * (valid / largest)
+
+
 def clamped_inputs(ops):
     """Every shader input, clamped to its parameter's allowed range (a texture or a driver
     may feed any value)."""
@@ -541,12 +561,13 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
     P = clamped_inputs(ops)
     # A zero-length or NaN Normal input (unconnected, or a broken texture) falls back to
     # the shading normal.
-    n0 = ops.normalize(ops.input("Normal"), ops.shading_normal())
+    n0 = ops.normalize(direction_input(ops, ops.input("Normal")), ops.shading_normal())
     v = ops.incoming()
     p_obj = ops.object_position()
     d = layer_thickness(ops, P, p_obj, plan)
     n1 = lower_normal(ops, P, n0, p_obj, d, plan)
-    tint = tuple(ops.maximum(c, 0.0) for c in ops.input_color("Base Color"))
+    # An albedo: each channel within [0, 1], NaN to 0.
+    tint = tuple(ops.clamp_input(c, 0.0, 1.0) for c in ops.input_color("Base Color"))
     inputs = program_inputs(P, tint)
     res = shade(ops, inputs, n0, n1, d, v, plan)
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
