@@ -24,6 +24,9 @@ PREVIEW_KEY = "layered_brdf_preview"  # build stamp of the group the preview sho
 PREVIEW_SIZE = 64
 
 _queued: set[str] = set()
+# The timer functions this module registered, kept across importlib.reload (which re-runs this
+# file in the same module dict), so unregister() cancels a timer queued by an earlier import too.
+_timers: list = globals().get("_timers", [])
 
 
 def group_of(mat):
@@ -163,6 +166,8 @@ def queue_preview(group) -> None:
     _queued.add(group.name)
     if not bpy.app.timers.is_registered(_render_queued):
         bpy.app.timers.register(_render_queued, first_interval=0.5)
+        if _render_queued not in _timers:
+            _timers.append(_render_queued)
 
 
 def _render_queued():
@@ -176,6 +181,9 @@ def _render_queued():
 
 
 def cancel_queued() -> None:
+    """Forget the queued previews and cancel every timer this module (or an earlier import of it) queued."""
     _queued.clear()
-    if bpy.app.timers.is_registered(_render_queued):
-        bpy.app.timers.unregister(_render_queued)
+    for fn in [*_timers, _render_queued]:
+        if bpy.app.timers.is_registered(fn):
+            bpy.app.timers.unregister(fn)
+    _timers.clear()

@@ -16,7 +16,14 @@ MATERIAL_KEY = "layered_brdf"  # custom property marking materials made by the a
 AOV_THICKNESS = "layer_thickness"
 AOV_LOWER_NORMAL = "lower_normal"
 AOV_UPPER_NORMAL = "upper_normal"  # Cycles' Normal pass averages closure normals: not n0 here
-SHADER_NODE = "Layered BRDF"
+SHADER_NODE = "Layered BRDF"  # the name of a new shader node (the artist may rename it)
+ROLE_KEY = "layered_brdf_role"  # on the add-on's nodes: "shader", "aov" or "base" (never matched by name)
+NAME_KEY = "layered_brdf_name"  # on the add-on's nodes: their name when stamped (a Shift+D copy differs)
+TEXT_KEY = "layered_brdf_text"  # on the OSL texts the add-on writes
+DISPLACED_KEY = "layered_brdf_displaced"  # the artist's material the layered one replaced in its slot
+SLOT_KEY = "layered_brdf_slot"  # how the slot got the layered material: "added", "filled" or "replaced"
+SUBGROUP_KEY = "layered_brdf_stamp"  # on the sub-groups the node groups use
+_OSL_TEXT = re.compile(r"layered_brdf_.*\.osl")
 
 
 def _material_for(target, name):
@@ -43,18 +50,116 @@ def _material_for(target, name):
         mat = bpy.data.materials.new(name)
         mat[MATERIAL_KEY] = True
         mat.node_tree.nodes.clear()  # a new material's default Principled BSDF is not ours to keep
-        if obj.data.materials:
-            obj.data.materials[obj.active_material_index] = mat
+        if obj.material_slots:
+            # The slot the object renders: the object's own when the slot is linked to the Object.
+            slot = obj.material_slots[obj.active_material_index]
+            displaced = slot.material
+            slot.material = mat
+            if displaced is not None:
+                mat[DISPLACED_KEY] = displaced  # an ID pointer: a user, so it is saved; Remove puts it back
+            mat[SLOT_KEY] = "replaced" if displaced is not None else "filled"
         else:
             obj.data.materials.append(mat)
+            mat[SLOT_KEY] = "added"
     return mat
 
 
+def _carries_shader(node) -> bool:
+    """A node running the add-on's shader: a group stamped with its version, or its OSL text."""
+    if node.bl_idname == "ShaderNodeGroup":
+        return node.node_tree is not None and node.node_tree.get(node_group_builder.STAMP_KEY) is not None
+    if node.bl_idname == "ShaderNodeScript":
+        return node.script is not None and (node.script.get(TEXT_KEY) is not None
+                                            or _OSL_TEXT.fullmatch(node.script.name) is not None)
+    return False
+
+
+def _feeds_something(node) -> bool:
+    return any(sock.is_linked for sock in node.outputs)
+
+
+def _pick(candidates, *preferences):
+    """The one of ``candidates`` the add-on owns: the only one, else the first preference that
+    singles one out (a Shift+D copy keeps the stamp but not the name it was stamped with)."""
+    if len(candidates) <= 1:
+        return candidates[0] if candidates else None
+    for prefer in (lambda n: n.get(NAME_KEY) == n.name, *preferences):
+        chosen = [n for n in candidates if prefer(n)]
+        if len(chosen) == 1:
+            return chosen[0]
+        if chosen:
+            candidates = chosen
+    return candidates[0]
+
+
 def shader_node(mat):
-    """The add-on's shader node in ``mat`` (group or script), or None."""
+    """The add-on's shader node in ``mat`` (group or script), or None.
+
+    Recognised by its stamp (``node["layered_brdf_role"] == "shader"``), never by its name; a
+    node from before stamps is recognised by the node group or OSL text it runs."""
     if mat.node_tree is None:
         return None
-    return mat.node_tree.nodes.get(SHADER_NODE)
+    nodes = mat.node_tree.nodes
+    stamped = [n for n in nodes if n.get(ROLE_KEY) == "shader"]
+    if stamped:
+        return _pick(stamped, _feeds_something)
+    legacy = [n for n in nodes if _carries_shader(n)]
+    return _pick(legacy, lambda n: n.name == SHADER_NODE, _feeds_something)
+
+
+def _stamp(node, role: str) -> None:
+    node[ROLE_KEY] = role
+    node[NAME_KEY] = node.name
+
+
+def _helper_nodes(tree, shader) -> list:
+    """The add-on's AOV outputs and base shader around ``shader`` (stamped, or unstamped ones
+    an older version made: linked to ``shader`` and named as it named them)."""
+    own = []
+    aovs = {}
+    for n in tree.nodes:
+        if n.get(ROLE_KEY) == "aov":
+            aovs.setdefault(n.aov_name if n.bl_idname == "ShaderNodeOutputAOV" else "", []).append(n)
+    linked_from_shader = lambda n: any(l.from_node == shader for s in n.inputs for l in s.links)
+    for group in aovs.values():
+        own.append(_pick(group, linked_from_shader))
+    own += [_pick([n for n in tree.nodes if n.get(ROLE_KEY) == "base"],
+                  lambda n: any(l.to_node == shader for s in n.outputs for l in s.links))]
+    if shader is not None and shader.get(ROLE_KEY) is None:  # made before stamps
+        for sock in shader.outputs:
+            for link in sock.links:
+                n = link.to_node
+                if n.bl_idname == "ShaderNodeOutputAOV" and n.name.startswith(OWN_PREFIX) and \
+                        n.aov_name in (AOV_THICKNESS, AOV_LOWER_NORMAL, AOV_UPPER_NORMAL):
+                    own.append(n)
+        base_in = _socket(shader.inputs, "Base Shader")
+        for link in (base_in.links if base_in is not None else ()):
+            n = link.from_node
+            if n.bl_idname == "ShaderNodeBsdfTransparent" and n.name.startswith(OWN_PREFIX):
+                own.append(n)
+    return list(dict.fromkeys(n for n in own if n is not None))
+
+
+def _claim(mat):
+    """Stamp the add-on's own nodes in ``mat`` (adopting those made before stamps) and unstamp
+    the artist's copies of them; returns (shader node or None, all the add-on's nodes)."""
+    tree = mat.node_tree
+    shader = shader_node(mat)
+    own = ([shader] if shader is not None else []) + _helper_nodes(tree, shader)
+    for n in own:
+        if n.get(ROLE_KEY) is None:
+            _stamp(n, "shader" if n == shader else "aov" if n.bl_idname == "ShaderNodeOutputAOV" else "base")
+        elif n.get(NAME_KEY) != n.name:
+            n[NAME_KEY] = n.name  # renamed by the artist: still ours
+    for n in tree.nodes:
+        if n.get(ROLE_KEY) is not None and n not in own:  # a copy the artist made: theirs
+            del n[ROLE_KEY]
+            if NAME_KEY in n:
+                del n[NAME_KEY]
+    if shader is not None and shader.bl_idname == "ShaderNodeScript" and shader.script is not None \
+            and shader.script.get(TEXT_KEY) is None:
+        shader.script[TEXT_KEY] = True
+    return shader, own
 
 
 def set_inputs(node, params: LayeredParams) -> None:
@@ -82,24 +187,34 @@ def _socket(sockets, name):
     return sockets.get(name) or sockets.get(_SOCKET_ALIASES.get(name, ""))
 
 
-def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan):
-    """(Re)build the add-on's nodes in ``mat``; the artist's own nodes and their links to the
-    shader node's inputs and outputs are kept."""
+def _active_output(tree):
+    outs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
+    return next((n for n in outs if n.is_active_output), outs[0] if outs else None)
+
+
+def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old, own):
+    """(Re)build the add-on's nodes (``old`` the shader node, ``own`` every node of the add-on)
+    in ``mat``.  The artist's nodes are kept, and so are their links to and from the shader
+    node: the new node feeds whatever the old one fed (a Mix Shader, the Material Output)."""
     tree = mat.node_tree
-    old = tree.nodes.get(SHADER_NODE)
     keep_in, keep_out = [], []
+    name, label, width, parent, location = SHADER_NODE, SHADER_NODE, 220, None, None
     if old is not None:
         for sock in old.inputs:
             for link in sock.links:
-                if not link.from_node.name.startswith(OWN_PREFIX):
+                if link.from_node not in own:
                     keep_in.append((link.from_socket, sock.name))
         for sock in old.outputs:
             for link in sock.links:
-                if not link.to_node.name.startswith(OWN_PREFIX) and link.to_node.bl_idname != "ShaderNodeOutputMaterial":
+                if link.to_node not in own:
                     keep_out.append((sock.name, link.to_socket))
-    for n in [n for n in tree.nodes if n.name.startswith(OWN_PREFIX)]:
+        name, label, width, parent = old.name, old.label, old.width, old.parent
+        location = tuple(old.location)
+        old_inputs = [sock.name for sock in old.inputs]
+        stashed = _stash_animation(mat, old.name)
+    for n in own:
         tree.nodes.remove(n)
-    out = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.is_active_output), None)
+    out = _active_output(tree)
     if out is None:
         out = tree.nodes.new("ShaderNodeOutputMaterial")
         out.location = (400, 0)
@@ -111,25 +226,35 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan):
         node = tree.nodes.new("ShaderNodeScript")
         node.mode = "INTERNAL"
         node.script = osl_backend.text_for(plan)
+        node.script[TEXT_KEY] = True
         osl_backend.compile_script_node(node)
-    node.name = node.label = SHADER_NODE
-    node.width = 220
-    node.location = (out.location[0] - 300, out.location[1])
-    shader_out = _socket(node.outputs, "BSDF")
-    tree.links.new(shader_out, out.inputs["Surface"])
-    for from_socket, name in keep_in:
-        target = _socket(node.inputs, name)
+    node.name = name
+    node.label = label
+    node.width = width
+    if parent is not None:
+        node.parent = parent
+    node.location = location if location is not None else (out.location[0] - 300, out.location[1])
+    _stamp(node, "shader")
+    if old is None:  # a first build: the material shows the layered shader
+        tree.links.new(_socket(node.outputs, "BSDF"), out.inputs["Surface"])
+    for from_socket, sock_name in keep_in:
+        target = _socket(node.inputs, sock_name)
         if target is not None:
             tree.links.new(from_socket, target)
-    for name, to_socket in keep_out:
-        source = _socket(node.outputs, name)
+    for sock_name, to_socket in keep_out:
+        source = _socket(node.outputs, sock_name)
         if source is not None:
             tree.links.new(source, to_socket)
+    if old is not None:
+        _restore_animation(mat, stashed, node, old_inputs)
     base_in = _socket(node.inputs, "Base Shader")
     if params.base_layer == "transparent" and base_in is not None and not base_in.is_linked:
         tr = tree.nodes.new("ShaderNodeBsdfTransparent")
         tr.name = tr.label = f"{OWN_PREFIX} base"
         tr.location = (node.location[0] - 250, node.location[1] - 300)
+        if parent is not None:
+            tr.parent = parent
+        _stamp(tr, "base")
         tree.links.new(tr.outputs[0], base_in)
     for k, (aov_name, socket_name, kind) in enumerate(((AOV_THICKNESS, "Thickness", "Value"),
                                                        (AOV_LOWER_NORMAL, "Lower Normal", "Color"),
@@ -141,8 +266,151 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan):
         aov.name = aov.label = f"{OWN_PREFIX} AOV {aov_name}"
         aov.aov_name = aov_name
         aov.location = (out.location[0], out.location[1] - 200 - 150 * k)
+        _stamp(aov, "aov")
         tree.links.new(src, aov.inputs[kind])
     return node
+
+
+def _shader_output(node):
+    return next((s for s in node.outputs if s.type == "SHADER"), None)
+
+
+def _end_of_chain(node):
+    """Following shader links from ``node``: the last node whose shader output feeds nothing."""
+    seen = set()
+    while node is not None and node.as_pointer() not in seen:
+        seen.add(node.as_pointer())
+        sock = _shader_output(node)
+        if sock is None:
+            return None
+        if not sock.is_linked:
+            return node
+        node = sock.links[0].to_node
+    return None
+
+
+def _repair(mat, node) -> None:
+    """Make a damaged tree render the layered shader again, touching none of the artist's nodes:
+    a Material Output when there is none, fed by the end of the shader's chain; the shader's
+    BSDF linked to the output's Surface when it feeds nothing and the Surface is free."""
+    tree = mat.node_tree
+    bsdf = _socket(node.outputs, "BSDF")
+    out = _active_output(tree)
+    if out is None:
+        out = tree.nodes.new("ShaderNodeOutputMaterial")
+        out.location = (node.location[0] + 300, node.location[1])
+        if node.parent is not None:
+            out.parent = node.parent
+        end = _end_of_chain(node)
+        if end is not None:
+            tree.links.new(_shader_output(end), out.inputs["Surface"])
+        return
+    if bsdf is not None and not bsdf.is_linked and not out.inputs["Surface"].is_linked:
+        tree.links.new(bsdf, out.inputs["Surface"])
+
+
+# --- keeping the artist's animation across a rebuild -----------------------------------------
+_STASH = "__layered_brdf_rebuild__"  # a placeholder node name while the shader is replaced
+
+
+def _node_prefix(name: str) -> str:
+    return 'nodes["' + name.replace("\\", "\\\\").replace('"', '\\"') + '"]'
+
+
+def _fcurve_owners(mat):
+    """(owner, path prefix, fcurves) of the material's and its node tree's animation and drivers."""
+    for owner, prefix in ((mat.node_tree, ""), (mat, "node_tree.")):
+        ad = owner.animation_data
+        if ad is None:
+            continue
+        actions = [ad.action] + [strip.action for track in ad.nla_tracks for strip in track.strips]
+        for action in actions:
+            if action is None:
+                continue
+            for layer in action.layers:
+                for strip in layer.strips:
+                    for bag in strip.channelbags:
+                        yield prefix, bag.fcurves
+        yield prefix, ad.drivers
+
+
+def _stash_animation(mat, name: str) -> list:
+    """Point the fcurves and drivers of node ``name`` at a placeholder, so removing the node
+    (which deletes the animation of a node) leaves them; :func:`_restore_animation` re-points them."""
+    stashed = []
+    for prefix, fcurves in _fcurve_owners(mat):
+        head = prefix + _node_prefix(name)
+        for fc in fcurves:
+            if fc.data_path.startswith(head):
+                rest = fc.data_path[len(head):]
+                fc.data_path = prefix + _node_prefix(_STASH) + rest
+                stashed.append((fc, prefix, rest))
+    return stashed
+
+
+_INPUT_INDEX = re.compile(r'\.inputs\[(\d+)\]')
+_INPUT_NAME = re.compile(r'\.inputs\["((?:[^"\\]|\\.)*)"\]')
+
+
+def _restore_animation(mat, stashed, node, old_inputs) -> None:
+    """Re-point stashed fcurves at ``node``, input sockets by name (their order may differ)."""
+    for fc, prefix, rest in stashed:
+        m = _INPUT_INDEX.match(rest)
+        if m is not None:
+            i = int(m.group(1))
+            sock = _socket(node.inputs, old_inputs[i]) if i < len(old_inputs) else None
+            if sock is not None:
+                index = next(k for k, s in enumerate(node.inputs) if s == sock)
+                rest = f".inputs[{index}]" + rest[m.end():]
+        else:
+            m = _INPUT_NAME.match(rest)
+            if m is not None:
+                sock = _socket(node.inputs, m.group(1))
+                if sock is not None:
+                    rest = f'.inputs["{sock.name}"]' + rest[m.end():]
+        fc.data_path = prefix + _node_prefix(node.name) + rest
+
+
+# --- the add-on's own data blocks -------------------------------------------------------------
+def _script_texts_in_use() -> set:
+    trees = [m.node_tree for m in bpy.data.materials if m.node_tree is not None]
+    trees += list(bpy.data.node_groups)
+    used = set()
+    for tree in trees:
+        for n in tree.nodes:
+            if n.bl_idname == "ShaderNodeScript" and n.script is not None:
+                used.add(n.script.name)
+    for screen in bpy.data.screens:
+        for area in screen.areas:
+            for space in area.spaces:
+                if space.type == "TEXT_EDITOR" and space.text is not None:
+                    used.add(space.text.name)
+    return used
+
+
+def remove_unused_own_data() -> list[str]:
+    """Remove the add-on's node groups and OSL texts (stamped) that nothing uses any more.
+
+    A group counts as unused when its only user is its fake user (asset marking sets one);
+    a text when no Script node runs it and no Text Editor shows it.  Unstamped, linked or
+    used data blocks are never touched.  Returns the names removed."""
+    removed = []
+    while True:
+        stale = [g for g in bpy.data.node_groups
+                 if g.library is None and (g.get(node_group_builder.STAMP_KEY) is not None
+                                           or g.get(SUBGROUP_KEY) is not None)
+                 and g.users - int(g.use_fake_user) <= 0]
+        if not stale:
+            break
+        for g in stale:
+            removed.append(g.name)
+            bpy.data.node_groups.remove(g)
+    used = _script_texts_in_use()
+    for t in [t for t in bpy.data.texts if t.library is None and t.get(TEXT_KEY) is not None
+              and t.name not in used]:
+        removed.append(t.name)
+        bpy.data.texts.remove(t)
+    return removed
 
 
 _SOCKET_PATH = re.compile(r'nodes\["(?P<node>(?:[^"\\]|\\.)*)"\]\.inputs\[(?P<index>\d+|"(?:[^"\\]|\\.)*")\]'
@@ -213,11 +481,13 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     plan = plan or plan_effects(params, animated_parameters(mat))
     if plan.lobe != params.lobe:
         plan = EffectPlan(**{**plan.to_dict(), "lobe": params.lobe})
-    node = shader_node(mat)
+    node, own = _claim(mat)
     key = f"{backend}:{plan.key}:{params.base_layer}"
     if node is None or mat.get("layered_brdf_build") != key or not _node_current(node, backend, plan):
-        node = _build_tree(mat, params, backend, plan)
+        node = _build_tree(mat, params, backend, plan, node, own)
         mat["layered_brdf_build"] = key
+        remove_unused_own_data()
+    _repair(mat, node)
     set_inputs(node, params)
     mat["layered_brdf_backend"] = backend
     mat["layered_brdf_enums"] = {"thickness_mode": params.thickness_mode, "normal_mode": params.normal_mode,
@@ -233,12 +503,47 @@ def _node_current(node, backend, plan) -> bool:
         node.script.as_string() == osl_backend.source(plan)
 
 
+def displaced_material(mat):
+    """The artist's material that ``mat`` replaced in an object's slot (Remove puts it back), or None."""
+    other = mat.get(DISPLACED_KEY)
+    return other if isinstance(other, bpy.types.Material) else None
+
+
 def remove_layered_material(obj) -> bool:
-    """Remove the add-on's material from ``obj``'s slots; True when one was removed."""
-    removed = False
-    for i, slot in enumerate(obj.material_slots):
-        if slot.material is not None and slot.material.get(MATERIAL_KEY):
-            obj.data.materials.pop(index=i)
-            removed = True
-            break
-    return removed
+    """Remove the add-on's material from ``obj``'s active slot (else its first layered slot) and
+    put back the material it replaced there; True when one was removed."""
+    slots = list(obj.material_slots)
+    order = [obj.active_material_index] + list(range(len(slots))) if slots else []
+    i = next((i for i in order if i < len(slots) and slots[i].material is not None
+              and slots[i].material.get(MATERIAL_KEY)), None)
+    if i is None:
+        return False
+    slot = slots[i]
+    mat = slot.material
+    displaced = displaced_material(mat)
+    how = mat.get(SLOT_KEY)
+    if displaced is not None:
+        slot.material = displaced
+    elif how in ("replaced", "filled") or slot.link == "OBJECT":
+        slot.material = None
+    else:  # the slot was added for it (or the material predates this record)
+        _remove_slot(obj, i)
+    for key in (DISPLACED_KEY, SLOT_KEY):
+        if key in mat:
+            del mat[key]
+    return True
+
+
+def _remove_slot(obj, index: int) -> None:
+    """Remove material slot ``index`` of ``obj`` (popping the mesh's material leaves the object a slot)."""
+    active = obj.active_material_index
+    obj.active_material_index = index
+    try:
+        with bpy.context.temp_override(object=obj):
+            done = bpy.ops.object.material_slot_remove() == {"FINISHED"}
+    except RuntimeError:
+        done = False
+    if not done:
+        obj.data.materials.pop(index=index)
+    obj.active_material_index = min(active if active < index else max(active - 1, 0),
+                                    max(len(obj.material_slots) - 1, 0))

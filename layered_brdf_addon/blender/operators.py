@@ -52,7 +52,7 @@ class LAYERED_BRDF_OT_apply(_Reporting, Operator):
 
 
 class LAYERED_BRDF_OT_remove(_Reporting, Operator):
-    """Remove the layered material from the active object's material slots"""
+    """Remove the layered material from the active object's slot and put back the material it replaced"""
 
     bl_idname = "layered_brdf.remove"
     bl_label = "Remove Layered BRDF"

@@ -43,21 +43,62 @@ def _subclasses(base):
         yield from _subclasses(sub)
 
 
-def _registered_versions(cls) -> list:
-    """``cls`` and same-named classes of earlier imports of this module that Blender holds registered."""
+def _package() -> str:
+    """This copy's package: ``layered_brdf_addon`` installed with pip or from a checkout,
+    ``bl_ext.<repository>.layered_brdf.layered_brdf_addon`` as an extension."""
+    return __name__.rsplit(".blender.", 1)[0]
+
+
+def _ours(obj) -> bool:
+    """Whether ``obj`` (a class or handler) comes from this copy (this or an earlier import of it)."""
+    module = getattr(obj, "__module__", None) or ""
+    return module == _package() or module.startswith(_package() + ".")
+
+
+def _registered_versions(cls, everyone: bool = False) -> list:
+    """``cls`` and same-named classes of earlier imports of this module that Blender holds registered
+    (with ``everyone``, also those of another copy of the add-on)."""
     bases = (bpy.types.PropertyGroup, bpy.types.Operator, bpy.types.Panel, bpy.types.Menu)
     base = next(b for b in bases if issubclass(cls, b))
-    return [c for c in _subclasses(base) if c.__name__ == cls.__name__ and c.is_registered]
+    return [c for c in _subclasses(base) if c.__name__ == cls.__name__ and c.is_registered
+            and (everyone or _ours(c))]
+
+
+def _other_copy() -> str | None:
+    """The package of another copy of the add-on that is registered now, or None."""
+    for cls in CLASSES:
+        for c in _registered_versions(cls, everyone=True):
+            if not _ours(c):
+                return c.__module__.rsplit(".blender.", 1)[0]
+    for handlers, fn in _handlers():
+        for f in handlers:
+            if getattr(f, "__qualname__", None) == fn.__qualname__ and not _ours(f) and \
+                    (getattr(f, "__module__", None) or "").endswith(".blender.properties"):
+                return f.__module__.rsplit(".blender.", 1)[0]
+    return None
+
+
+class AlreadyRegistered(RuntimeError):
+    pass
 
 
 def is_registered() -> bool:
-    return (hasattr(bpy.types.Material, properties.SETTINGS)
-            or any(_registered_versions(cls) for cls in CLASSES)
+    """Whether this copy of the add-on (this or an earlier import of it) is registered."""
+    return (any(_registered_versions(cls) for cls in CLASSES)
             or any(_same_function(f, fn) for handlers, fn in _handlers() for f in handlers))
 
 
 def register() -> None:
-    """Register the add-on; when it already is (e.g. registered twice), unregister it first."""
+    """Register the add-on; when it already is (e.g. registered twice), unregister it first.
+
+    Another copy of the add-on registered in the same Blender (say the pip-installed package and
+    the extension) is not replaced: registering raises :class:`AlreadyRegistered`, naming it."""
+    other = _other_copy()
+    if other is not None:
+        raise AlreadyRegistered(
+            f"Layered BRDF is already enabled from '{other}'; this copy ('{_package()}') was not "
+            "registered. Disable the other copy first (Edit > Preferences > Add-ons, or its "
+            "unregister()), then enable this one.")
     if is_registered():
         unregister()
     for cls in CLASSES:
@@ -70,12 +111,13 @@ def register() -> None:
 
 
 def unregister() -> None:
-    """Remove every handler, the material property and every class, whichever import registered them."""
+    """Remove this copy's handlers, timers, material property and classes (whichever import of it
+    registered them); another copy's registration is left as it is."""
     for handlers, fn in _handlers():
         for f in [f for f in handlers if _same_function(f, fn)]:
             handlers.remove(f)
     assets.cancel_queued()
-    if hasattr(bpy.types.Material, properties.SETTINGS):
+    if _other_copy() is None and hasattr(bpy.types.Material, properties.SETTINGS):
         delattr(bpy.types.Material, properties.SETTINGS)
     for cls in reversed(CLASSES):
         for registered in _registered_versions(cls):

@@ -74,6 +74,9 @@ def draw_material(layout, context) -> None:
     row.operator("layered_brdf.apply", text="Rebuild", icon="FILE_REFRESH")
     row.operator("layered_brdf.mark_asset", text="Mark Asset", icon="ASSET_MANAGER")
     row.operator("layered_brdf.remove", text="", icon="X")
+    displaced = M.displaced_material(mat)
+    if displaced is not None:
+        layout.label(text=f"Remove puts '{displaced.name}' back in the slot", icon="INFO")
     if M.shader_node(mat) is None:
         layout.label(text="The material has no Layered BRDF node: Rebuild restores it", icon="INFO")
     elif problem is None:
