@@ -81,13 +81,23 @@ def test_absurd_value_in_a_params_file_exits_2_naming_it(tmp_path, fmt, kind):
     assert files_under(tmp_path / "out") == []
 
 
-@pytest.mark.parametrize("option, value", [
+ABSURD_JOBS = [
     ("samples", HUGE_INT), ("seed", HUGE_INT), ("resolution", [HUGE_INT, 16]), ("sun", [HUGE_INT, 0, 1]),
     ("sun_strength", HUGE_INT), ("d_max", HUGE_INT), ("name", HUGE_INT), ("preset", HUGE_INT),
     ("samples", float("inf")), ("sun", [float("inf"), 0, 1]), ("threads", float("-inf")),
     ("samples", "deep"), ("sun", "deep"), ("output", "deep"), ("d_min", "deep"), ("params", "deep"),
     ("tilt", "x" * 500_000),
-])
+]
+
+
+def _case_id(case) -> str:
+    option, value = case
+    text = "deep" if value == "deep" else "huge_int" if HUGE_INT in (value if isinstance(value, list) else [value]) \
+        else "long_text" if isinstance(value, str) else repr(value).replace(" ", "")
+    return f"{option}-{text}"
+
+
+@pytest.mark.parametrize("option, value", ABSURD_JOBS, ids=[_case_id(c) for c in ABSURD_JOBS])
 def test_an_absurd_job_fails_alone_naming_the_option(tmp_path, option, value):
     good = {"name": "good", "resolution": 16}
     bad = {"name": "bad", option: value}
