@@ -74,8 +74,7 @@ def load_job_file(path: str | os.PathLike, output_dir: str | os.PathLike | None 
             except ParameterError as e:
                 name_error, explicit = str(e), None
         base = explicit if explicit else (
-            options["preset"] if isinstance(options.get("preset"), str) and len(options["preset"]) <= 100
-            else f"job{k + 1}")
+            options["preset"] if _is_name(options.get("preset")) else f"job{k + 1}")
         name = base
         if name in seen:
             if explicit:
@@ -93,6 +92,14 @@ def load_job_file(path: str | os.PathLike, output_dir: str | os.PathLike | None 
         jobs.append(job)
     check_batch_targets(jobs, p, report=report)
     return jobs
+
+
+def _is_name(value: Any) -> bool:
+    try:
+        check_name(value)
+        return True
+    except ParameterError:
+        return False
 
 
 def _identities(path: Path) -> set[Any]:
