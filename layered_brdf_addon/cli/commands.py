@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import re
 import sys
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Sequence
@@ -25,6 +26,19 @@ from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 PROG = "layered-brdf"
 COMMANDS = ("gallery", "render", "batch")
 EXIT_OK, EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+# A token that starts like a number ("-1e2", "-.5", "-3x2", "-inf") is a value, not an option:
+# argparse's own rule misses scientific notation ("-1e2": "expected one argument").
+NEGATIVE_NUMBER = re.compile(r"^-(\.?\d|inf(inity)?$|nan$)", re.IGNORECASE)
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse's parser, reading every negative number (scientific notation too) as a value."""
+
+    def __init__(self, *args: Any, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
 
 # ---------------------------------------------------------------------------
@@ -96,7 +110,7 @@ def _add_scene_options(p: argparse.ArgumentParser, samples_help: str) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of all sub-commands."""
-    parser = argparse.ArgumentParser(
+    parser = ArgumentParser(
         prog=PROG, description="Render iridescent layered materials (Granier & Heidrich 2003) with Blender. "
         "Without a command, renders the gallery.",
         epilog="exit codes: 0 ok, 1 a render or job failed, 2 invalid input (nothing written), 130 interrupted")
@@ -262,7 +276,7 @@ def cmd_batch(ns: argparse.Namespace) -> int:
     report = Path(ns.report).absolute() if ns.report else None
     if report is not None and report.suffix.lower() != ".json":
         raise ParameterError("report", ns.report, "a path ending in .json")
-    jobs = load_job_file(ns.jobfile, output_dir=ns.output_dir or Path("out") / "batch")
+    jobs = load_job_file(ns.jobfile, output_dir=ns.output_dir or Path("out") / "batch", report=report)
     results = run_batch(jobs, n_jobs=n_jobs, scheduler=ns.scheduler, timeout=timeout, progress=ns.progress)
     rows = []
     for r in results:

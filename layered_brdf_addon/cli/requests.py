@@ -10,15 +10,20 @@ from __future__ import annotations
 import json
 import math
 import os
+import reprlib
+import stat
+import sys
+import threading
 import tomllib
 from dataclasses import dataclass, field
+from json.scanner import py_make_scanner
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from ..model import policy
 from ..model.params import PARAM_SPECS, LayeredParams, ParameterError
 from ..model.presets import PRESETS, preset
-from .staging import OutputPaths, output_stem
+from .staging import OutputPaths, TargetError, check_targets, output_stem
 
 PARAM_NAMES = tuple(s.name for s in PARAM_SPECS)
 RUN_OPTIONS = ("name", "preset", "params", "blend", "object", "backend", "samples", "resolution", "sun",
@@ -29,6 +34,161 @@ REFERENCE_RESOLUTION = 128
 REFERENCE_THREADS = 2
 MAX_RESOLUTION = 16384
 _BLEND_MAGIC = (b"BLENDER", b"\x1f\x8b", b"\x28\xb5\x2f\xfd")  # plain, gzip, zstd
+
+# Limits on what a params or job file, and each value in it, may be.
+MAX_INPUT_BYTES = 1 << 20  # a params or job file: 1 MiB
+MAX_TEXT = 4096  # characters of a string value (a path, a name)
+MAX_ITEMS = 16  # items of a list value (sun: 3, resolution: 2)
+MAX_INT_DIGITS = 18  # digits of an integer value
+MAX_NAME = 200  # characters of a name
+MAX_STEM_BYTES = 200  # bytes (UTF-8) of an output stem's file name
+_PARSE_RECURSION = 200_000  # how deep the readers may recurse (values nested ~50,000 deep)
+_PARSE_STACK = 256 << 20  # the stack of the thread that reads a file
+
+_SUN_ALLOWED = ("three finite numbers X Y Z, the direction towards the sun, with a length of at least 1e-9 "
+                "whose square is finite (|X|, |Y|, |Z| below about 1e154)")
+OPTION_ALLOWED = {
+    "name": f"a name of 1-{MAX_NAME} characters without '/', '\\' or NUL, not starting with '.'",
+    "preset": "one of " + ", ".join(sorted(PRESETS)),
+    "params": "the path of a .json or .toml file of parameter values",
+    "blend": "the path of a .blend file",
+    "object": "the name of the object in the .blend that gets the material",
+    "backend": "one of " + ", ".join(policy.BACKENDS),
+    "samples": "an integer in [1, 1000000]",
+    "resolution": f"N or WxH with integers in [1, {MAX_RESOLUTION}]",
+    "sun": _SUN_ALLOWED,
+    "sun_strength": "a number in [0, 1e+06]",
+    "seed": f"an integer in [0, {2**31 - 1}]",
+    "threads": "an integer in [1, 1024]",
+    "output": "a file path stem in a writable folder (STEM.png, STEM.exr and STEM.json are written)",
+}
+
+
+# ---------------------------------------------------------------------------
+# absurd values: summarised in messages, refused before they reach a validator
+class _LongInteger:
+    """An integer of a JSON file too long to be worth converting (kept as its digits)."""
+
+    def __init__(self, digits: str):
+        self.digits = digits
+
+    def __repr__(self) -> str:
+        return f"<an integer of {len(self.digits.lstrip('-'))} digits>"
+
+
+class _Shown:
+    """A value's summary for an error message (``repr`` gives the summary)."""
+
+    def __init__(self, text: str):
+        self.text = text
+
+    def __repr__(self) -> str:
+        return self.text
+
+    __str__ = __repr__
+
+
+def _int_digits(x: int) -> int:
+    try:
+        return len(str(abs(x)))
+    except ValueError:  # more digits than Python converts
+        return int(abs(x).bit_length() * 0.30103) + 1
+
+
+def _shape(value: Any, limit: int = 100_000) -> tuple[int, int]:
+    """(depth, number of items) of nested lists and tables, without recursion (stops at ``limit`` items)."""
+    depth, count = 0, 0
+    stack = [(value, 0)]
+    while stack and count < limit:
+        v, d = stack.pop()
+        if isinstance(v, (list, tuple)):
+            items = v
+        elif isinstance(v, dict):
+            items = list(v.values())
+        else:
+            continue
+        depth = max(depth, d + 1)
+        count += len(items)
+        stack.extend((x, d + 1) for x in items)
+    return depth, count
+
+
+def _absurd_scalar(value: Any) -> str | None:
+    """Why a scalar is beyond what any option takes, or None."""
+    if isinstance(value, _LongInteger):
+        return repr(value)[1:-1]
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10 ** MAX_INT_DIGITS:
+        return f"an integer of {_int_digits(value)} digits"
+    if isinstance(value, str) and len(value) > MAX_TEXT:
+        return f"a text of {len(value)} characters"
+    return None
+
+
+def _absurd(value: Any) -> str | None:
+    """Why a value is beyond what any option takes (too long, too deep, too big), or None."""
+    if isinstance(value, (list, tuple)):
+        depth, count = _shape(value)
+        if depth > 1:
+            return f"a list nested {depth} levels deep"
+        if count > MAX_ITEMS:
+            return f"a list of {count} items"
+        for x in value:
+            if _absurd_scalar(x):
+                return f"a list holding {_absurd_scalar(x)}"
+        return None
+    if isinstance(value, dict):
+        depth, count = _shape(value)
+        return f"a table of {len(value)} entries" + (f" nested {depth} levels deep" if depth > 1 else "")
+    return _absurd_scalar(value)
+
+
+_repr = reprlib.Repr()
+_repr.maxlevel, _repr.maxlist, _repr.maxtuple, _repr.maxdict, _repr.maxstring, _repr.maxother = 2, 8, 8, 8, 60, 60
+_repr.maxlong = 40
+
+
+def shown(value: Any) -> Any:
+    """``value`` itself for an error message when it is short; a summary when it is absurd."""
+    why = _absurd(value)
+    if why is not None:
+        return _Shown(f"<{why}>")
+    if isinstance(value, (list, tuple, dict, str)):
+        text = _repr.repr(value)
+        return value if text == repr(value) else _Shown(text)
+    return value
+
+
+def short_name(key: Any) -> str:
+    """A key of a file as a parameter name in a message (long or odd keys cut)."""
+    text = key if isinstance(key, str) else repr(shown(key))
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def allowed_for(name: str) -> str:
+    """What option or parameter ``name`` allows, for a message."""
+    for s in PARAM_SPECS:
+        if s.name == name:
+            return s.allowed
+    return OPTION_ALLOWED.get(name, "a plain value")
+
+
+def check_plain(name: str, value: Any) -> Any:
+    """``value`` if it is a plain value an option may take (a short text, a number that is not
+    absurdly long, a short flat list); else :class:`ParameterError` naming ``name``."""
+    why = _absurd(value)
+    if why is not None:
+        raise ParameterError(short_name(name), _Shown(f"<{why}>"), allowed_for(name))
+    return value
+
+
+def check_name(value: Any, name: str = "name") -> str:
+    """A job or render name: used as a file name, so it is a name and not a path."""
+    allowed = OPTION_ALLOWED["name"]
+    if not isinstance(value, str) or not value.strip() or len(value) > MAX_NAME:
+        raise ParameterError(name, shown(value), allowed)
+    if any(c in value for c in "/\\\x00") or value.startswith(".") or os.path.isabs(value):
+        raise ParameterError(name, shown(value), allowed + " (a name, not a path)")
+    return value
 
 
 @dataclass(frozen=True)
@@ -85,7 +245,7 @@ class RenderRequest:
             else:
                 argv += [flag, repr(value) if isinstance(value, float) else str(value)]
         if self.blend:
-            argv += ["--blend", str(self.blend), "--object", str(self.object)]
+            argv += ["--blend", str(self.blend), f"--object={self.object}"]
         argv += ["--backend", self.backend, "--seed", str(self.seed)]
         if self.samples is not None:
             argv += ["--samples", str(self.samples)]
@@ -98,7 +258,7 @@ class RenderRequest:
         if self.threads is not None:
             argv += ["--threads", str(self.threads)]
         if self.name:
-            argv += ["--name", self.name]
+            argv.append(f"--name={self.name}")
         argv += ["--output", str(self.output)]
         return argv
 
@@ -153,37 +313,129 @@ def parse_resolution(value: Any) -> tuple[int, int]:
 
 
 def parse_sun(value: Any) -> tuple[float, float, float]:
-    """Three finite numbers, not all zero: the direction from the scene towards the sun."""
-    allowed = "three finite numbers X Y Z, not all zero (the direction towards the sun)"
+    """Three finite numbers whose direction can be taken: the direction from the scene
+    towards the sun.  Refused: non-finite components, a length below 1e-9, and a squared
+    length that overflows (the renderer would fall back to straight up)."""
+    allowed = _SUN_ALLOWED
+    check_plain("sun", value)
     if isinstance(value, str):
         value = value.replace(",", " ").split()
     if not isinstance(value, (list, tuple)) or len(value) != 3:
-        raise ParameterError("sun", value, allowed)
+        raise ParameterError("sun", shown(value), allowed)
     try:
         xyz = tuple(float_option("sun", c) for c in value)
     except ParameterError:
-        raise ParameterError("sun", value, allowed) from None
-    if math.hypot(*xyz) < 1e-9:
-        raise ParameterError("sun", value, allowed)
+        raise ParameterError("sun", shown(value), allowed) from None
+    n2 = math.fsum(c * c for c in xyz)
+    if not math.isfinite(n2) or n2 < 1e-18:
+        raise ParameterError("sun", shown(value), allowed)
     return xyz  # type: ignore[return-value]
+
+
+_FILE_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+               (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def read_regular_file(path: str | os.PathLike, name: str, allowed: str, limit: int | None = None,
+                      head: int | None = None) -> bytes:
+    """The bytes of a regular file (at most ``head`` of them), or :class:`ParameterError`
+    naming ``name``: for a file that cannot be opened, one that is not a regular file (a
+    FIFO, a device, a folder: never waited on or read), and one over ``limit`` bytes."""
+    p = Path(path)
+    try:  # O_NONBLOCK: opening a FIFO does not wait for a writer
+        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except OSError as e:
+        raise ParameterError(name, str(p), f"{allowed} ({e.strerror or e})") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = next((k for test, k in _FILE_KINDS if test(mode)), "not a regular file")
+            raise ParameterError(name, str(p), f"{allowed} (a regular file; this is {kind})")
+        os.set_blocking(fd, True)
+        want = head if head is not None else (limit + 1 if limit is not None else -1)
+        chunks, total = [], 0
+        while want < 0 or total < want:
+            chunk = os.read(fd, 1 << 16 if want < 0 else min(1 << 16, want - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+    except OSError as e:
+        raise ParameterError(name, str(p), f"{allowed} ({e.strerror or e})") from None
+    finally:
+        os.close(fd)
+    data = b"".join(chunks)
+    if limit is not None and head is None and len(data) > limit:
+        raise ParameterError(name, str(p), f"{allowed} (at most {limit // (1 << 20)} MiB; this file is larger)")
+    return data
+
+
+def _parse_int(text: str) -> Any:
+    return int(text) if len(text) <= 100 else _LongInteger(text)
+
+
+def _loads_json(text: str) -> Any:
+    decoder = json.JSONDecoder(parse_int=_parse_int)
+    decoder.scan_once = py_make_scanner(decoder)  # Python's recursion limit applies, not C's
+    return decoder.decode(text)
+
+
+def _deep(fn: Callable[[], Any]) -> Any:
+    """``fn()`` in a thread with a large stack and a high recursion limit, so that a
+    file whose values are nested thousands of levels deep can be read (and refused
+    value by value) rather than crash the reader."""
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = fn()
+        except BaseException as e:  # handed to the caller
+            box["error"] = e
+
+    limit = sys.getrecursionlimit()
+    try:
+        previous = threading.stack_size(_PARSE_STACK)
+    except (ValueError, RuntimeError):
+        previous = None
+    try:
+        sys.setrecursionlimit(max(limit, _PARSE_RECURSION))
+        thread = threading.Thread(target=target, name="layered-brdf-read", daemon=True)
+        thread.start()
+        if previous is not None:
+            threading.stack_size(previous)
+            previous = None
+        thread.join()
+    finally:
+        if previous is not None:
+            threading.stack_size(previous)
+        sys.setrecursionlimit(limit)
+    if "error" in box:
+        raise box["error"]
+    return box.get("value")
 
 
 def read_table_file(path: str | os.PathLike, name: str, allowed: str) -> Any:
     """The contents of a ``.toml`` or ``.json`` file; :class:`ParameterError` naming ``name``
-    (with ``allowed``) if it cannot be read or parsed."""
+    (with ``allowed``) if it cannot be read or parsed, is not a regular file or is larger
+    than :data:`MAX_INPUT_BYTES`.  Integers too long to be a value are kept as a marker
+    that :func:`check_plain` refuses."""
     p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix not in (".toml", ".json"):
+        raise ParameterError(name, str(p), allowed)
+    data = read_regular_file(p, name, allowed, limit=MAX_INPUT_BYTES)
     try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise ParameterError(name, str(p), f"{allowed} ({e.__class__.__name__}: {e})") from None
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ParameterError(name, str(p), f"{allowed} (UnicodeDecodeError: {e})") from None
     try:
-        if p.suffix.lower() == ".toml":
-            return tomllib.loads(text)
-        if p.suffix.lower() == ".json":
-            return json.loads(text)
+        return _deep(lambda: tomllib.loads(text) if suffix == ".toml" else _loads_json(text))
     except (tomllib.TOMLDecodeError, json.JSONDecodeError) as e:
-        raise ParameterError(name, str(p), f"{allowed} ({e})") from None
-    raise ParameterError(name, str(p), allowed)
+        raise ParameterError(name, str(p), f"{allowed} ({str(e)[:200]})") from None
+    except RecursionError:
+        raise ParameterError(name, str(p), f"{allowed} (values nested deeper than can be read)") from None
+    except (ValueError, OverflowError, MemoryError) as e:  # e.g. an integer of more than 4300 digits
+        raise ParameterError(name, str(p), f"{allowed} ({str(e)[:200]})") from None
 
 
 def load_params_file(path: str | os.PathLike) -> dict[str, Any]:
@@ -193,12 +445,16 @@ def load_params_file(path: str | os.PathLike) -> dict[str, Any]:
     when present, so a render's sidecar can be given to re-render its material.
     """
     p = Path(path)
-    allowed = "a readable .json or .toml file of parameter values"
+    allowed = "a readable .json or .toml file of parameter values (a regular file of at most 1 MiB)"
     data = read_table_file(p, "params", allowed)
     if isinstance(data, dict) and isinstance(data.get("params"), dict):
         data = data["params"]
     if not isinstance(data, dict):
         raise ParameterError("params", str(p), allowed + " (a table of name = value)")
+    for key, value in data.items():
+        if key not in PARAM_NAMES:
+            raise ParameterError(short_name(key), shown(value), "a known parameter name: " + ", ".join(PARAM_NAMES))
+        check_plain(key, value)
     return data
 
 
@@ -206,28 +462,65 @@ def check_blend_file(path: str | os.PathLike) -> Path:
     """Raise :class:`ParameterError` unless ``path`` looks like a .blend Blender can read."""
     p = Path(path)
     allowed = "a readable .blend file"
-    try:
-        with open(p, "rb") as f:
-            head = f.read(7)
-    except OSError as e:
-        raise ParameterError("blend", str(p), f"{allowed} ({e.strerror or e})") from None
+    head = read_regular_file(p, "blend", allowed, head=7)
     if not any(head.startswith(m) for m in _BLEND_MAGIC):
         raise ParameterError("blend", str(p), f"{allowed} (this file is not a .blend)")
     return p.resolve()
 
 
-def check_output(value: Any) -> Path:
-    allowed = "a file path stem in a writable folder (STEM.png, STEM.exr and STEM.json are written)"
-    if not isinstance(value, (str, os.PathLike)) or not str(value).strip():
-        raise ParameterError("output", value, allowed)
+def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Whether writing ``a`` would replace ``b``: the same resolved path, or (both existing)
+    the same file (a hard link, a symlink)."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def check_output(value: Any, *, inputs: Iterable[tuple[str, Path]] = (), confine_to: str | os.PathLike | None = None,
+                 name: str = "output") -> Path:
+    """The absolute stem of an output set whose three files can be written; else
+    :class:`ParameterError` naming ``name``.
+
+    Checked before anything renders: the stem's file name (at most
+    :data:`MAX_STEM_BYTES` bytes, not hidden), every file of the set
+    (:func:`~.staging.check_targets`: no folder in the way, the folder writable, names
+    that fit), that no file of the set is one of ``inputs`` (``(label, path)``), and with
+    ``confine_to`` that the set stays inside that folder (symlinks resolved; the stem is
+    then returned resolved).
+    """
+    allowed = OPTION_ALLOWED["output"]
+    if not isinstance(value, (str, os.PathLike)) or not str(value).strip() or "\x00" in str(value) \
+            or len(str(value)) > MAX_TEXT:
+        raise ParameterError(name, shown(value), allowed)
     stem = output_stem(Path(value).expanduser()).absolute()
+    if confine_to is not None:
+        root = os.path.realpath(confine_to)
+        folder = os.path.realpath(stem.parent)
+        if os.path.commonpath([root, folder]) != root:
+            raise ParameterError(name, str(value), f"a path inside the output folder {root} "
+                                 f"(this one resolves to {os.path.join(folder, stem.name)})")
+        stem = Path(folder) / stem.name
+    if stem.name in ("", ".", "..") or stem.name.startswith("."):
+        raise ParameterError(name, str(value), allowed + "; a stem whose name does not start with '.' "
+                             "(hidden names are the temporary files')")
+    if len(os.fsencode(stem.name)) > MAX_STEM_BYTES:
+        raise ParameterError(name, shown(str(value)), allowed + f"; a stem whose name is at most {MAX_STEM_BYTES} "
+                             f"bytes (this one has {len(os.fsencode(stem.name))})")
     if stem.is_dir():
-        raise ParameterError("output", str(value), allowed + "; it names a folder")
-    folder = stem.parent
-    while not folder.exists():
-        folder = folder.parent
-    if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
-        raise ParameterError("output", str(value), allowed + f"; {folder} is not a writable folder")
+        raise ParameterError(name, str(value), allowed + "; it names a folder")
+    paths = OutputPaths(stem)
+    try:
+        check_targets(paths.all())
+    except TargetError as e:
+        raise ParameterError(name, str(value), f"{allowed}; {e}") from None
+    for label, p in inputs:
+        for f in paths.all():
+            if same_file(f, p):
+                raise ParameterError(name, str(value), f"{allowed}, none of them an input file "
+                                     f"({f.name} would replace {label} {p})")
     return stem
 
 
@@ -241,27 +534,32 @@ def _resolve(path: Any, base_dir: Path | None, name: str) -> Path:
 
 
 def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathLike | None = None,
-                         output_dir: str | os.PathLike | None = None) -> RenderRequest:
+                         output_dir: str | os.PathLike | None = None, confine: bool = False,
+                         extra_inputs: Sequence[tuple[str, Path]] = ()) -> RenderRequest:
     """Validate a job's options (the ``render`` options, with ``_`` in names) without Blender.
 
     ``params`` and ``blend`` paths are relative to ``base_dir`` (default: the current
     folder); ``output`` is relative to ``output_dir`` (default: the current folder) and
     defaults to ``output_dir/NAME`` with NAME the job's name, preset or ``render``.
-    Raises :class:`ParameterError` naming the first invalid option.
+    With ``confine`` the outputs must stay inside ``output_dir`` (a batch's jobs).  No
+    output may replace the params file, the .blend or one of ``extra_inputs``.  Every
+    output target is checked (:func:`check_output`).  Raises :class:`ParameterError`
+    naming the first invalid option.
     """
     opts = {k: v for k, v in options.items() if v is not None}
     for key in opts:
         if key not in RUN_OPTIONS and key not in PARAM_NAMES:
-            raise ParameterError(key, opts[key], "a render option (" + ", ".join(RUN_OPTIONS)
+            raise ParameterError(short_name(key), shown(opts[key]), "a render option (" + ", ".join(RUN_OPTIONS)
                                  + ") or a parameter name (" + ", ".join(PARAM_NAMES) + ")")
+        check_plain(key, opts[key])
     base = Path(base_dir) if base_dir is not None else None
     name = opts.get("name")
-    if name is not None and (not isinstance(name, str) or not name.strip()):
-        raise ParameterError("name", name, "a non-empty string")
+    if name is not None:
+        check_name(name)
 
     preset_name = opts.get("preset")
     if preset_name is not None and (not isinstance(preset_name, str) or preset_name not in PRESETS):
-        raise ParameterError("preset", preset_name, "one of " + ", ".join(sorted(PRESETS)))
+        raise ParameterError("preset", shown(preset_name), "one of " + ", ".join(sorted(PRESETS)))
     params = preset(preset_name) if preset_name else LayeredParams()
     params_file = None
     if "params" in opts:
@@ -280,7 +578,7 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
         blend = check_blend_file(_resolve(opts["blend"], base, "blend"))
         obj = opts.get("object")
         if not isinstance(obj, str) or not obj:
-            raise ParameterError("object", obj, "the name of the object in the .blend that gets the material")
+            raise ParameterError("object", shown(obj), "the name of the object in the .blend that gets the material")
         for key in REFERENCE_ONLY:
             if key in opts:
                 raise ParameterError(key, opts[key], "no value with a .blend (the file's own lights are used)")
@@ -301,11 +599,13 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
     out_base = Path(output_dir) if output_dir is not None else Path.cwd()
     if "output" in opts:
         out = opts["output"]
-        if isinstance(out, (str, os.PathLike)) and not Path(out).expanduser().is_absolute():
+        if isinstance(out, (str, os.PathLike)) and "\x00" not in str(out) \
+                and not Path(out).expanduser().is_absolute():
             out = out_base / Path(out)
     else:
         out = out_base / (name or preset_name or (params_file.stem if params_file else "render"))
-    output = check_output(out)
+    inputs = [(label, p) for label, p in (("the params file", params_file), ("the .blend", blend)) if p is not None]
+    output = check_output(out, inputs=[*inputs, *extra_inputs], confine_to=out_base if confine else None)
     return RenderRequest(params=params, output=output, backend=backend, preset=preset_name,
                          params_file=params_file, overrides=overrides, samples=samples, resolution=resolution,
                          sun=sun, sun_strength=strength, seed=seed, threads=threads, blend=blend, object=obj,

@@ -8,9 +8,11 @@ leave nothing behind.  Nothing here imports bpy.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import signal
+import stat
 import threading
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,6 +20,10 @@ from typing import Any, Callable, Iterable
 
 OUTPUT_SUFFIXES = (".png", ".exr", ".json")
 _TEMP_MARK = ".tmp"
+_BACKUP_MARK = ".old"
+PID_DIGITS = 7  # Linux's largest pid_max, 4194304, has 7 digits
+NAME_MAX = 255  # bytes of a file name on the usual file systems
+PATH_MAX = 4096  # bytes of a path
 
 
 @dataclass(frozen=True)
@@ -57,10 +63,86 @@ def temp_path(final: Path, pid: int | None = None) -> Path:
     return final.with_name(f".{final.stem}{_TEMP_MARK}{pid}{final.suffix}")
 
 
+def backup_path(final: Path, pid: int | None = None) -> Path:
+    """Where the earlier version of ``final`` waits while a set of outputs is renamed."""
+    t = temp_path(final, pid)
+    return t.with_name(t.stem + _BACKUP_MARK + t.suffix)
+
+
+def longest_temp_name(final: Path) -> str:
+    """The longest name written next to ``final`` while it is made (Blender's partial EXR of
+    its temporary file), with the largest process ids: a name that fits fits them all."""
+    big = "9" * PID_DIGITS
+    return f"..{final.stem}{_TEMP_MARK}{big}.partial{big}{final.suffix}"
+
+
+class TargetError(ValueError):
+    """An output file that could not be written where it is asked for."""
+
+
+def _probe(folder: Path, name_length: int) -> None:
+    """Create and remove a file with a name of ``name_length`` bytes in ``folder``."""
+    base = f"..layered-brdf-probe-{os.getpid()}-{threading.get_ident() % 100000}-"
+    name = base + "x" * max(0, name_length - len(base.encode()) - 4) + ".tmp"
+    probe = folder / name
+    try:
+        fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o600)
+    except OSError as e:
+        if e.errno == errno.ENAMETOOLONG:
+            raise TargetError(f"the file names in {folder} cannot be that long") from None
+        raise TargetError(f"{folder} is not a folder this process can write to ({e.strerror or e})") from None
+    os.close(fd)
+    try:
+        os.unlink(probe)
+    except OSError:
+        pass
+
+
+def check_targets(finals: Iterable[str | os.PathLike]) -> list[Path]:
+    """Check, before anything is rendered, that every file of ``finals`` can be written.
+
+    Each name (with the longest temporary name made from it) must fit the file system,
+    none may be an existing folder or other non-regular file, the nearest existing folder
+    above each must be a folder, and a probe file (created and removed at once) must be
+    writable there.  Raises :class:`TargetError` saying what is wrong; returns the
+    absolute paths.  Nothing is left behind.
+    """
+    paths = [Path(os.path.abspath(f)) for f in finals]
+    longest: dict[Path, int] = {}
+    for f in paths:
+        if not f.name or f.name in (".", ".."):
+            raise TargetError(f"{f} is not a file name")
+        n = len(os.fsencode(longest_temp_name(f)))
+        if n > NAME_MAX or len(os.fsencode(f.name)) > NAME_MAX:
+            raise TargetError(f"the file name {f.name[:40]}... is too long ({len(os.fsencode(f.name))} bytes; "
+                              f"with its temporary names it needs at most {NAME_MAX - (n - len(os.fsencode(f.name)))})")
+        if len(os.fsencode(str(f.parent / longest_temp_name(f)))) >= PATH_MAX:
+            raise TargetError(f"the path {str(f)[:60]}... is too long (at most {PATH_MAX} bytes with its temporary names)")
+        if os.path.lexists(f):
+            if f.is_dir():
+                raise TargetError(f"{f} is a folder")
+            if f.exists() and not stat.S_ISREG(f.stat().st_mode):
+                raise TargetError(f"{f} exists and is not a regular file")
+        longest[f.parent] = max(longest.get(f.parent, 0), n)
+    for folder, n in longest.items():
+        existing, missing = folder, []
+        while not os.path.lexists(existing):
+            missing.append(existing.name)
+            existing = existing.parent
+        if not existing.is_dir():
+            raise TargetError(f"{existing} is not a folder")
+        for part in missing:
+            if len(os.fsencode(part)) > NAME_MAX:
+                raise TargetError(f"the folder name {part[:40]}... is too long")
+        _probe(existing, n if not missing else len(os.fsencode(missing[-1])))
+    return paths
+
+
 def stale_temps(stem: str | os.PathLike) -> list[Path]:
     """Temporary files of the outputs of ``stem`` left by a process that was killed.
 
-    Matches this module's temporary names (``.NAME.tmpPID.SUFFIX``) and the
+    Matches this module's temporary names (``.NAME.tmpPID.SUFFIX``), the earlier
+    versions kept while a set is renamed (``.NAME.tmpPID.old.SUFFIX``) and the
     ``..NAME.tmpPID.partialPID.exr`` names Blender's EXR writer uses for them.
     """
     stem = Path(stem)
@@ -68,7 +150,7 @@ def stale_temps(stem: str | os.PathLike) -> list[Path]:
     if not folder.is_dir():
         return []
     pattern = re.compile(r"\.{1,2}" + re.escape(stem.name) + re.escape(_TEMP_MARK)
-                         + r"\d+(\.partial\d+)?(\.png|\.exr|\.json)(\.rewrite)?")
+                         + r"\d+(\.partial\d+|" + re.escape(_BACKUP_MARK) + r")?(\.png|\.exr|\.json)(\.rewrite)?")
     return sorted(p for p in folder.iterdir() if pattern.fullmatch(p.name) and p.is_file())
 
 
@@ -230,14 +312,53 @@ class StagedOutputs:
         return self
 
     def commit(self) -> list[Path]:
+        """Rename every file to its final name, or none: if a rename fails, the files
+        already placed are taken back (their earlier versions restored) and the error raised."""
         with self._lock():
             missing = [str(t) for t in self._temps.values() if not t.exists()]
             if missing:
                 raise RuntimeError("outputs were not written: " + ", ".join(missing))
-            for f in self.finals:
-                os.replace(self._temps[f], f)
+            placed: list[tuple[Path, Path | None]] = []
+            try:
+                for f in self.finals:
+                    backup = self._keep_earlier(f)
+                    try:
+                        os.replace(self._temps[f], f)
+                    except BaseException:
+                        if backup is not None and os.path.lexists(f):
+                            os.unlink(backup)  # a second link: the file itself is untouched
+                        elif backup is not None:
+                            os.replace(backup, f)
+                        raise
+                    placed.append((f, backup))
+            except BaseException:
+                for f, backup in reversed(placed):
+                    with contextlib.suppress(OSError):
+                        if backup is not None:
+                            os.replace(backup, f)
+                        else:
+                            os.unlink(f)
+                raise
+            for f, backup in placed:
+                if backup is not None:
+                    with contextlib.suppress(OSError):
+                        os.unlink(backup)
                 self.committed.append(f)
         return list(self.committed)
+
+    @staticmethod
+    def _keep_earlier(final: Path) -> Path | None:
+        """A second name for the file ``final`` (if there is one) until the set is placed."""
+        if not os.path.lexists(final) or os.path.isdir(final):
+            return None
+        backup = backup_path(final)
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(backup)
+        try:
+            os.link(final, backup, follow_symlinks=False)
+        except OSError:  # no hard links here: move it aside (a moment without the file)
+            os.replace(final, backup)
+        return backup
 
     def discard(self) -> None:
         """Delete the temporary files (and Blender's partial files for them)."""
