@@ -174,28 +174,56 @@ class NodeOps:
             return self.vmath("SCALE", a, scale=s)
         if ka == "float" and kb == "vector" and op == "MULTIPLY":
             return self.vmath("SCALE", b, scale=a)
+        # A scalar meeting a channel triple: the scalar on every component.
+        return self.vmath(op, self.broadcast(a), self.broadcast(b))
         raise TypeError(f"unsupported {op} between {ka} and {kb}")
 
+    def broadcast(self, x):
+        """``x`` as a vector: a scalar on every component."""
+        if _kind(x) == "vector":
+            return x
+        if isinstance(x, Number):
+            return (float(x),) * 3
+        return self.combine(x, x, x)
+
+    def _vector_args(self, *xs):
+        return any(_kind(x) == "vector" for x in xs)
+
     # the ops interface of the shading program ------------------------------
+    def is_vector(self, x):
+        return _kind(x) == "vector"
+
     def clamp(self, x, lo, hi):
         if isinstance(x, Number):
             return min(max(x, lo), hi)
+        if _kind(x) == "vector":
+            return self.vmath("MINIMUM", self.vmath("MAXIMUM", x, self.broadcast(lo)), self.broadcast(hi))
         n, d = self.node("ShaderNodeClamp", {"Value": x, "Min": lo, "Max": hi})
         return self.out(n, d, 0, "float")
 
     def sqrt(self, x):
-        return math.sqrt(max(x, 0.0)) if isinstance(x, Number) else self.math("SQRT", x)
+        if isinstance(x, Number):
+            return math.sqrt(max(x, 0.0))
+        if _kind(x) == "vector":  # Power with exponent 0.5 of the non-negative part
+            return self.vmath("POWER", self.vmath("MAXIMUM", x, (0.0, 0.0, 0.0)), (0.5, 0.5, 0.5))
+        return self.math("SQRT", x)
 
     def exp(self, x):
         if isinstance(x, Number):
             return math.exp(min(x, 80.0))
+        if _kind(x) == "vector":
+            return self.vmath("POWER", (math.e,) * 3, self.vmath("MINIMUM", x, (80.0, 80.0, 80.0)))
         return self.math("EXPONENT", self.math("MINIMUM", x, 80.0))
 
     def cos(self, x):
-        return math.cos(x) if isinstance(x, Number) else self.math("COSINE", x)
+        if isinstance(x, Number):
+            return math.cos(x)
+        return self.vmath("COSINE", x) if _kind(x) == "vector" else self.math("COSINE", x)
 
     def sin(self, x):
-        return math.sin(x) if isinstance(x, Number) else self.math("SINE", x)
+        if isinstance(x, Number):
+            return math.sin(x)
+        return self.vmath("SINE", x) if _kind(x) == "vector" else self.math("SINE", x)
 
     def atan2(self, y, x):
         return self.math("ARCTAN2", y, x)
@@ -203,22 +231,44 @@ class NodeOps:
     def maximum(self, a, b):
         if isinstance(a, Number) and isinstance(b, Number):
             return max(a, b)
+        if self._vector_args(a, b):
+            return self.vmath("MAXIMUM", self.broadcast(a), self.broadcast(b))
         return self.math("MAXIMUM", a, b)
 
     def minimum(self, a, b):
         if isinstance(a, Number) and isinstance(b, Number):
             return min(a, b)
+        if self._vector_args(a, b):
+            return self.vmath("MINIMUM", self.broadcast(a), self.broadcast(b))
         return self.math("MINIMUM", a, b)
 
+    def _vector_greater(self, a, b):
+        """Per component, 1 where ``a > b`` else 0: ``max(sign(a - b), 0)``."""
+        diff = a if isinstance(b, Number) and b == 0.0 else self.vmath("SUBTRACT", self.broadcast(a),
+                                                                        self.broadcast(b))
+        return self.vmath("MAXIMUM", self.vmath("SIGN", diff), (0.0, 0.0, 0.0))
+
     def lt(self, a, b):
+        if self._vector_args(a, b):
+            return self._vector_greater(b, a)
         return self.math("LESS_THAN", a, b)
 
     def gt(self, a, b):
+        if self._vector_args(a, b):
+            return self._vector_greater(a, b)
         return self.math("GREATER_THAN", a, b)
 
     def select(self, c, a, b):
         if isinstance(a, Number) and isinstance(b, Number) and a == b:
             return a
+        if self._vector_args(c, a, b):
+            if _kind(c) != "vector":
+                return self.select_vec(c, self.broadcast(a), self.broadcast(b))
+            # Per component: a Mix node with a vector factor.
+            n, d = self.node("ShaderNodeMix", {"Factor_Vector": c, "A_Vector": self.broadcast(b),
+                                               "B_Vector": self.broadcast(a)},
+                             data_type="VECTOR", factor_mode="NON_UNIFORM", clamp_factor=True)
+            return self.out(n, d, "Result_Vector", "vector")
         n, d = self.node("ShaderNodeMix", {"Factor_Float": c, "A_Float": b, "B_Float": a}, data_type="FLOAT",
                          clamp_factor=True)
         return self.out(n, d, "Result_Float", "float")
@@ -271,7 +321,9 @@ class NodeOps:
         return self.clamp(self.maximum(lo, x), lo, hi)
 
     def abs(self, x):
-        return abs(x) if isinstance(x, Number) else self.math("ABSOLUTE", x)
+        if isinstance(x, Number):
+            return abs(x)
+        return self.vmath("ABSOLUTE", x) if _kind(x) == "vector" else self.math("ABSOLUTE", x)
 
     def nan_to_zero(self, x):
         """``x``, or 0 where it is NaN: ``Maximum(0, x) + Minimum(0, x)`` (see clamp_input)."""

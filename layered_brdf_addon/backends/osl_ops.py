@@ -126,8 +126,8 @@ class OslOps:
 
     def __init__(self):
         self.functions: dict[tuple, tuple[str, str, list]] = {}  # key -> (name, source, output kinds)
-        self.order: list[str] = []
-        self._names: dict[str, tuple] = {}
+        self.order: list[tuple] = []  # keys, in the order the functions were first needed
+        self._names: dict[str, set] = {}
         self._bodies: list[FunctionBody] = []
         self._count = 0
         self._return_kind: dict = {}
@@ -189,37 +189,58 @@ class OslOps:
         prec = PREC_MUL if op in "*/" else PREC_ADD
         return self.emit(kind, f"{self.use(a, prec)} {op} {self.use(b, prec + 1)}", prec)
 
+    def is_vector(self, x):
+        return _kind(x) == "vector"
+
+    def _triple(self, x, vector: bool):
+        """``x`` as an argument of a per-component function: a scalar widened when needed."""
+        if vector and _kind(x) != "vector":
+            return self.atom(f"vector({self.use(x)})", "vector") if not isinstance(x, Number) else \
+                self.atom(f"vector({literal(x)})", "vector")
+        return x
+
+    def _unary(self, name, x, fn):
+        if isinstance(x, Number):
+            return fn(x)
+        return self.call_expr(name, (x,), _kind(x))
+
     def clamp(self, x, lo, hi):
         if isinstance(x, Number):
             return min(max(x, lo), hi)
-        return self.call_expr("clamp", (x, lo, hi), "float")
+        v = _kind(x) == "vector"
+        return self.call_expr("clamp", (x, self._triple(lo, v), self._triple(hi, v)), _kind(x))
 
     def sqrt(self, x):
-        return math.sqrt(max(x, 0.0)) if isinstance(x, Number) else self.call_expr("safe_sqrt", (x,), "float")
+        return self._unary("safe_sqrt", x, lambda a: math.sqrt(max(a, 0.0)))
 
     def exp(self, x):
-        return math.exp(min(x, 80.0)) if isinstance(x, Number) else self.call_expr("safe_exp", (x,), "float")
+        return self._unary("safe_exp", x, lambda a: math.exp(min(a, 80.0)))
 
     def cos(self, x):
-        return math.cos(x) if isinstance(x, Number) else self.call_expr("cos", (x,), "float")
+        return self._unary("cos", x, math.cos)
 
     def sin(self, x):
-        return math.sin(x) if isinstance(x, Number) else self.call_expr("sin", (x,), "float")
+        return self._unary("sin", x, math.sin)
 
     def atan2(self, y, x):
         return self.call_expr("atan2", (y, x), "float")
 
-    def maximum(self, a, b):
+    def _extremum(self, name, a, b, fn):
         if isinstance(a, Number) and isinstance(b, Number):
-            return max(a, b)
-        return self.call_expr("max", (a, b), "float")
+            return fn(a, b)
+        v = "vector" in (_kind(a), _kind(b))
+        return self.call_expr(name, (self._triple(a, v), self._triple(b, v)), "vector" if v else "float")
+
+    def maximum(self, a, b):
+        return self._extremum("max", a, b, max)
 
     def minimum(self, a, b):
-        if isinstance(a, Number) and isinstance(b, Number):
-            return min(a, b)
-        return self.call_expr("min", (a, b), "float")
+        return self._extremum("min", a, b, min)
 
     def _compare(self, op, a, b):
+        if "vector" in (_kind(a), _kind(b)):  # per component, 1 or 0
+            name = "greater_than" if op == ">" else "less_than"
+            return self.call_expr(name, (self._triple(a, True), self._triple(b, True)), "vector")
         return self.emit("int", f"{self.use(a, PREC_CMP + 1)} {op} {self.use(b, PREC_CMP + 1)}", PREC_CMP)
 
     def lt(self, a, b):
@@ -231,6 +252,10 @@ class OslOps:
     def _select(self, c, a, b, kind):
         if isinstance(c, Number):
             return a if c > 0.5 else b
+        if "vector" in (_kind(a), _kind(b)):
+            kind = "vector"
+        if _kind(c) == "vector":  # per component
+            return self.call_expr("mix", (self._triple(b, True), self._triple(a, True), c), "vector")
         cond = self.use(c, PREC_TERNARY + 1) if _kind(c) == "int" else f"{self.use(c, PREC_CMP + 1)} > 0.5"
         return self.emit(kind, f"{cond} ? {self.use(a, PREC_TERNARY + 1)} : {self.use(b, PREC_TERNARY + 1)}",
                          PREC_TERNARY)
@@ -274,7 +299,7 @@ class OslOps:
         return x
 
     def abs(self, x):
-        return abs(x) if isinstance(x, Number) else self.call_expr("abs", (x,), "float")
+        return self._unary("abs", x, abs)
 
     def nan_to_zero(self, x):
         return self.call_expr("nan_to_zero", (x,), "float")
@@ -292,7 +317,8 @@ class OslOps:
         return self._invoke(fn, dict(zip(names, values)), settings)
 
     def call(self, name, fn, inputs, **static):
-        return self._invoke(fn, dict(inputs), static)
+        order = [p for p in inspect.signature(fn).parameters if p in inputs]  # the signature's order
+        return self._invoke(fn, {p: inputs[p] for p in order}, static)
 
     def _invoke(self, fn, inputs: dict, settings: dict):
         kinds = tuple((k, _kind(v)) for k, v in inputs.items())
@@ -317,12 +343,14 @@ class OslOps:
         return dict(zip(keys, outs))
 
     def _function_name(self, fn, key, settings) -> str:
+        """``fn``'s name; OSL overloads it by argument types, so only a variant of other
+        settings with the same types takes a suffix."""
         name = fn.__name__
-        if name in self._names and self._names[name] != key:
-            name = "_".join([name] + [str(v) for _, v in sorted(settings.items())])
-            while name in self._names and self._names[name] != key:
-                name += "_"
-        self._names[name] = key
+        kinds = key[2]
+        while any(k != key and k[2] == kinds for k in self._names.get(name, ())):
+            name = "_".join([name] + [str(v) for _, v in sorted(settings.items())]) if name == fn.__name__ \
+                else name + "_"
+        self._names.setdefault(name, set()).add(key)
         return name
 
     def _define(self, fn, key, kinds, settings):
@@ -358,7 +386,7 @@ class OslOps:
             outputs = [(n, _kind(v)) for n, v in zip(out_names, values)]
             body.ret = ("outputs", list(zip(out_names, values)))
             self.functions[key] = (fname, self._write(body, doc, local_names), outputs)
-        self.order.append(fname)
+        self.order.append(key)
 
     # ------------------------------------------------------------------ writing
     def _write(self, body: FunctionBody, doc: str, local_names: dict) -> str:
@@ -484,8 +512,7 @@ class OslOps:
         return "".join(line + "\n" for line in lines)
 
     def source_of_functions(self) -> str:
-        by_name = {name: src for name, src, _ in self.functions.values()}
-        return "\n".join(by_name[n] for n in self.order)
+        return "\n".join(self.functions[key][1] for key in self.order)
 
 
 def _comment(doc: str) -> str:

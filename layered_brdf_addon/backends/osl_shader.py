@@ -62,10 +62,31 @@ float safe_sqrt(float x)
   return sqrt(max(x, 0.0));
 }
 
+vector safe_sqrt(vector x)
+{
+  return sqrt(max(x, vector(0.0)));
+}
+
 /* exp that cannot overflow: arguments come from products of exponents up to 1e5. */
 float safe_exp(float x)
 {
   return exp(min(x, 80.0));
+}
+
+vector safe_exp(vector x)
+{
+  return exp(min(x, vector(80.0)));
+}
+
+/* Per component, 1 where a > b (a < b), else 0: masks of the three channels. */
+vector greater_than(vector a, vector b)
+{
+  return vector(a[0] > b[0], a[1] > b[1], a[2] > b[2]);
+}
+
+vector less_than(vector a, vector b)
+{
+  return vector(a[0] < b[0], a[1] < b[1], a[2] < b[2]);
 }
 
 /* Unit vector, or `fallback` for zero-length vectors (V + l* = 0, a degenerate Normal

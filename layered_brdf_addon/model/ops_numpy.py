@@ -10,23 +10,61 @@ def _s(x):
     return np.asarray(x, dtype=float)
 
 
+def is_vector(x) -> bool:
+    """A 3-vector: a direction, or a channel triple (one component per RGB channel)."""
+    return isinstance(x, _Vec) or (isinstance(x, (tuple, list)) and len(x) == 3)
+
+
+def _align(*xs):
+    """Plain arrays that broadcast together, and whether a vector was among them: a per-point
+    scalar (...) meeting a vector (..., 3) gets a trailing axis."""
+    if not any(is_vector(x) for x in xs):
+        return [x if isinstance(x, (int, float)) else np.asarray(x, dtype=float) for x in xs], False
+    out = []
+    for x in xs:
+        if isinstance(x, (int, float)):
+            out.append(x)
+        elif is_vector(x):
+            out.append(_plain(x))
+        else:
+            a = np.asarray(x, dtype=float)
+            out.append(a[..., None] if a.ndim else a)
+    return out, True
+
+
+def _elementwise(fn):
+    """``fn`` on aligned arguments; the result is a vector when an argument was one."""
+    def apply(*xs):
+        args, vector = _align(*xs)
+        r = fn(*args)
+        return vec(r) if vector else r
+
+    apply.__name__ = fn.__name__
+    return apply
+
+
+@_elementwise
 def clamp(x, lo, hi):
     return np.clip(x, lo, hi)
 
 
+@_elementwise
 def sqrt(x):
     return np.sqrt(np.maximum(x, 0.0))  # guarded, like Blender's Math node
 
 
+@_elementwise
 def exp(x):
     with np.errstate(over="ignore", under="ignore"):
         return np.exp(np.minimum(x, 80.0))
 
 
+@_elementwise
 def cos(x):
     return np.cos(x)
 
 
+@_elementwise
 def sin(x):
     return np.sin(x)
 
@@ -39,24 +77,29 @@ def atan2(y, x):
     return np.arctan2(y, x)
 
 
+@_elementwise
 def maximum(a, b):
     return np.maximum(a, b)
 
 
+@_elementwise
 def minimum(a, b):
     return np.minimum(a, b)
 
 
+@_elementwise
 def lt(a, b):
-    return (_s(a) < b).astype(float)
+    return (np.asarray(a) < b).astype(float)
 
 
+@_elementwise
 def gt(a, b):
-    return (_s(a) > b).astype(float)
+    return (np.asarray(a) > b).astype(float)
 
 
+@_elementwise
 def select(c, a, b):
-    return np.where(_s(c) > 0.5, a, b)
+    return np.where(np.asarray(c) > 0.5, a, b)
 
 
 def select_vec(c, a, b):
@@ -107,6 +150,9 @@ class _Vec(np.ndarray):
 
     def __truediv__(self, other):
         return vec(self._base() / self._operand(other))
+
+    def __rtruediv__(self, other):
+        return vec(self._operand(other) / self._base())
 
     def __add__(self, other):
         return vec(self._base() + self._operand(other))
@@ -216,14 +262,14 @@ def named(hint, x):
     return x
 
 
+@_elementwise
 def clamp_input(x, lo, hi):
     """An input clamped to its parameter's range; NaN gives ``lo``."""
-    x = np.asarray(x, dtype=float)
     return np.where(np.isnan(x), lo, np.clip(x, lo, hi))
 
 
+@_elementwise
 def nan_to_zero(x):
-    x = np.asarray(x, dtype=float)
     return np.where(np.isnan(x), 0.0, x)
 
 
@@ -233,5 +279,6 @@ def components(v):
     return v[..., 0], v[..., 1], v[..., 2]
 
 
+@_elementwise
 def abs(x):  # noqa: A001 - the ops interface's name
     return np.abs(x)

@@ -129,10 +129,9 @@ def lobe_peak(ops, e, alpha, mu, *, lobe):
 
 
 @shader_function
-def lobe_weight(ops, amplitude, normal, e, v, *, lobe):
-    """The closure about ``normal`` whose value at its centre equals ``amplitude``: its
-    weight and its Beckmann alpha."""
-    mu = ops.dot(normal, v)
+def lobe_weight(ops, amplitude, mu, e, *, lobe):
+    """The closure whose value at its centre equals ``amplitude``, for a view at cosine
+    ``mu`` from its normal: its weight and its Beckmann alpha."""
     alpha = lobe_alpha(ops, e, mu)
     weight = amplitude / lobe_peak(ops, e, alpha, mu, lobe=lobe)
     return weight, alpha
@@ -162,16 +161,16 @@ def lobe_correlation(ops, p, q, delta2):
 
 
 @shader_function
-def fold_interference(ops, AR, AT, AI, eR, eT, eI, cR, cT, cI):
+def fold_interference(ops, AR, AT, AI, eR, eT, eI, dRT, dRI, dTI):
     """Non-negative least-squares fit of ``AR gR + AT gT + AI gI`` (``AI < 0``) by
     ``wR gR + wT gT``, unchanged where ``AI >= 0``: Cycles clamps a negative closure weight
     to 0, so destructive interference (cos 2 Phi < 0, eq. 5) is folded into the reflected
-    and transmitted lobes.
+    and transmitted lobes.  ``d..``: squared angles between the lobes' centres.
 
     Gaussian lobes ``g = exp(-e theta^2 / 2)`` in the tangent plane; the normal equations
     are solved in the basis of unit-norm lobes (``|g|^2 = 1/(2e)`` up to a common factor),
     with a small ridge: equal lobes make them singular.  Where the 2x2 solution has a
-    negative weight, the better single-lobe fit is used.
+    negative weight, the better single-lobe fit is used.  Works per channel on triples.
     """
     eR = ops.maximum(eR, 1e-3)  # exponent 0 has no finite Gaussian norm
     eT = ops.maximum(eT, 1e-3)
@@ -179,9 +178,9 @@ def fold_interference(ops, AR, AT, AI, eR, eT, eI, cR, cT, cI):
     uR = 1.0 / ops.sqrt(2.0 * eR)
     uT = 1.0 / ops.sqrt(2.0 * eT)
     uI = 1.0 / ops.sqrt(2.0 * eI)
-    rRT, one_minus = lobe_correlation(ops, eR, eT, angle2(ops, cR, cT))
-    rRI, _ = lobe_correlation(ops, eR, eI, angle2(ops, cR, cI))
-    rTI, _ = lobe_correlation(ops, eT, eI, angle2(ops, cT, cI))
+    rRT, one_minus = lobe_correlation(ops, eR, eT, dRT)
+    rRI, _ = lobe_correlation(ops, eR, eI, dRI)
+    rTI, _ = lobe_correlation(ops, eT, eI, dTI)
     aR, aT, aI = AR * uR, AT * uT, AI * uI  # coefficients on unit-norm lobes
     bR = aR + rRT * aT + rRI * aI
     bT = rRT * aR + aT + rTI * aI
@@ -202,32 +201,70 @@ def fold_interference(ops, AR, AT, AI, eR, eT, eI, cR, cT, cI):
     return AR_folded, AT_folded, AI_folded
 
 
-# ---------------------------------------------------------------- one channel
+# ---------------------------------------------------------------- the channels
+# A channel value is a scalar (one wavelength, the spectral modes) or a triple (the three
+# RGB channels at once, one component each: a shader evaluates them as one vector).  The
+# arithmetic is the same; only the directions differ per channel, so they are computed
+# channel by channel (once, when the indices are equal and every channel takes one path).
+def channels(ops, x, shared=False):
+    """The per-channel scalars of a channel value (the middle one only when ``shared``)."""
+    if not ops.is_vector(x):
+        return [x]
+    parts = list(ops.components(x))
+    return [parts[1]] if shared else parts
+
+
+def gather(ops, parts):
+    """A channel value from per-channel scalars (one part: every channel the same)."""
+    if len(parts) == 3:
+        return ops.combine(*parts)
+    return parts[0]
+
+
+def spread(ops, x, like):
+    """``x`` (one channel's scalar) as a channel value shaped like ``like``."""
+    return ops.combine(x, x, x) if ops.is_vector(like) and not ops.is_vector(x) else x
+
+
 @shader_function
-def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, interference=True):
-    """Amplitudes, centres and exponents of one channel's three lobes (eqs. 3-11)."""
-    f = fresnel_f0(ops, r1, r0)
-    F = schlick(ops, cos_v, f)
-    # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
-    AR_amp = ks * F * (e0 + 2.0) * INV_2PI
-    AR = AR_amp * cos_v
-    # The light path leaving along v: refract -v into the layer (t_o), mirror it on the
-    # lower boundary (r) and refract it out (l*): the transmitted lobe's centre.
-    eta = r0 / r1
-    inv_eta = r1 / r0
-    k_o = 1.0 - eta * eta * (1.0 - cos_v * cos_v)
-    s_o = ops.sqrt(k_o)  # <t_o, -n0>
+def light_path(ops, eta, s_o, entering, cos_v, n0, n1, v, r_v):
+    """The light direction ``l*`` whose path through the layer leaves along ``v`` (eqs. 10,
+    11): refract ``-v`` into the layer (``t_o``), mirror it on the lower boundary, refract
+    it out.  ``through`` is 0 where total internal reflection or eq. 11 blocks the path
+    (``entering``: 0 where ``v`` itself cannot enter); ``l*`` is then the mirror direction
+    ``r_v``."""
+    inv_eta = 1.0 / eta
     t_o = v * (-eta) + n0 * (eta * cos_v - s_o)
     to_n1 = ops.dot(t_o, n1)
     r = t_o - n1 * (2.0 * to_n1)
     cos_r = ops.dot(r, n0)
     k_l = 1.0 - inv_eta * inv_eta * (1.0 - cos_r * cos_r)
     l_raw = r * inv_eta - n0 * (inv_eta * cos_r - ops.sqrt(k_l))
-    # Eq. 11 and total internal reflection on either crossing: no path, T = 0.
-    through = ops.gt(k_o, 0.0) * ops.gt(k_l, 0.0) * ops.lt(to_n1, 0.0) * ops.gt(cos_r, 0.0) * ops.gt(cos_v, 0.0)
+    through = entering * ops.gt(k_l, 0.0) * ops.lt(to_n1, 0.0) * ops.gt(cos_r, 0.0)
     l_star = ops.normalize(ops.select_vec(through, l_raw, r_v), r_v)
-    cos_ls = ops.clamp(ops.dot(l_star, n0), 0.0, 1.0)
-    through = through * ops.gt(cos_ls, 0.0)
+    return l_star, through
+
+
+@shader_function
+def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, interference=True, shared=False):
+    """Amplitudes, centres and exponents of the three lobes of each channel (eqs. 3-11).
+    ``r1``, ``lam``: a scalar (one channel) or a triple (three)."""
+    f = fresnel_f0(ops, r1, r0)
+    F = schlick(ops, cos_v, f)
+    # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
+    AR_amp = ks * F * (e0 + 2.0) * INV_2PI
+    AR = AR_amp * cos_v
+    eta = r0 / r1
+    k_o = 1.0 - eta * eta * (1.0 - cos_v * cos_v)
+    s_o = ops.sqrt(k_o)  # <t_o, -n0>
+    entering = ops.gt(k_o, 0.0) * ops.gt(cos_v, 0.0)
+    paths = [light_path(ops, e, s, ok, cos_v, n0, n1, v, r_v)
+             for e, s, ok in zip(channels(ops, eta, shared), channels(ops, s_o, shared),
+                                 channels(ops, entering, shared))]
+    l_stars = [p[0] for p in paths]
+    cos_ls = spread(ops, gather(ops, [ops.clamp(ops.dot(ls, n0), 0.0, 1.0) for ls in l_stars]), r1)
+    # Eq. 11 and total internal reflection on either crossing: no path, T = 0.
+    through = spread(ops, gather(ops, [p[1] for p in paths]), r1) * ops.gt(cos_ls, 0.0)
     # The in-layer lobe seen from outside: exponent e1 / r1^2, times cos(l*)/cos(t) for the
     # stretch within the plane of incidence (geometric mean of the two directions).
     s_ls = ops.sqrt(ops.maximum(1.0 - eta * eta * (1.0 - cos_ls * cos_ls), 1e-12))
@@ -239,16 +276,23 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     # Interference, eq. 5: sqrt(R T) of two Phong lobes is a lobe of exponent
     # (e0 + e1')/2 about their weighted centre; phase from eq. 3 at that centre.
     w_sum = ops.maximum(e0 + e1p, 1e-6)
-    c_I = ops.normalize(r_v * e0 + l_star * e1p, r_v)
-    atten = ops.exp(-(e0 * e1p) / (4.0 * w_sum) * angle2(ops, r_v, l_star))
-    cos_ci = ops.clamp(ops.dot(c_I, n0), 0.0, 1.0)
+    c_Is = [ops.normalize(r_v * e0 + ls * e, r_v) for ls, e in zip(l_stars, channels(ops, e1p, shared))]
+    d_RT = spread(ops, gather(ops, [angle2(ops, r_v, ls) for ls in l_stars]), r1)
+    atten = ops.exp(-(e0 * e1p) / (4.0 * w_sum) * d_RT)
+    cos_ci = spread(ops, gather(ops, [ops.clamp(ops.dot(c, n0), 0.0, 1.0) for c in c_Is]), r1)
     s_i = ops.sqrt(1.0 - eta * eta * (1.0 - cos_ci * cos_ci))
     if interference:
         phase = (math.pi / lam) * r1 * d * (s_i + s_o)  # eq. 3
         AI = ops.select(through, 2.0 * ops.cos(2.0 * phase) * ops.sqrt(AR_amp * AT_amp) * atten * cos_ci, 0.0)
     else:
         AI = 0.0  # averaged over the band: cos(2 Phi) has mean 0
-    return dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), l_star=l_star, c_I=c_I)
+    d_RI = spread(ops, gather(ops, [angle2(ops, r_v, c) for c in c_Is]), r1)
+    d_TI = spread(ops, gather(ops, [angle2(ops, ls, c) for ls, c in zip(l_stars, c_Is)]), r1)
+    out = dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), d_RT=d_RT, d_RI=d_RI, d_TI=d_TI)
+    for k, (ls, c) in enumerate(zip(l_stars, c_Is)):
+        out[f"l_star{k}"] = ls
+        out[f"c_I{k}"] = c
+    return out
 
 
 @shader_function
@@ -264,20 +308,27 @@ def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
                  for c, r1, lam, base in zip("rgb", P["r1"], wavelengths, P["base"]))
 
 
-def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True):
-    """One channel: its lobes (eqs. 3-11), the fold, and the normal, exponent, alpha and
-    weight of its transmitted and interference closures.  A lobe centred on the direction
-    c is a closure about normalize(v + c).  A node backend builds it once as a sub-group
-    used per channel."""
+def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True, shared=False):
+    """The channels' lobes (eqs. 3-11), the fold, and the normals, exponents, alphas and
+    weights of their transmitted and interference closures.  A lobe centred on the
+    direction c is a closure about normalize(v + c).  ``r1``, ``lam``: a scalar (one
+    wavelength) or a triple (the RGB channels); ``shared``: equal indices, one direction
+    per lobe for every channel.  ``N_T0``.., ``N_I0``..: the closure normals, one per
+    channel (one when shared or for a scalar)."""
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     r_v = n0 * (2.0 * ops.dot(v, n0)) - v
-    t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference)
-    AR, AT, AI = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], r_v, t["l_star"], t["c_I"])
+    t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference,
+                      shared=shared)
+    AR, AT, AI = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], t["d_RT"], t["d_RI"],
+                                   t["d_TI"])
+    n = 1 if shared or not ops.is_vector(r1) else 3
     out = dict(AR=AR)
-    for tag, amp, centre, e in (("T", AT, t["l_star"], t["eT"]), ("I", AI, t["c_I"], t["eI"])):
-        normal = ops.normalize(v + centre, n0)
-        w, alpha = lobe_weight(ops, amp, normal, e, v, lobe=lobe)
-        out.update({f"N_{tag}": normal, f"e_{tag}": e, f"alpha_{tag}": alpha, f"w_{tag}": w})
+    for tag, amp, centre, e in (("T", AT, "l_star", t["eT"]), ("I", AI, "c_I", t["eI"])):
+        normals = [ops.normalize(v + t[f"{centre}{k}"], n0) for k in range(n)]
+        mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
+        w, alpha = lobe_weight(ops, amp, mu, e, lobe=lobe)
+        out.update({f"N_{tag}{k}": N for k, N in enumerate(normals)})
+        out.update({f"e_{tag}": e, f"alpha_{tag}": alpha, f"w_{tag}": w})
     return out
 
 
@@ -317,7 +368,7 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
         e_parts, a_parts = [], []
         for g, (acc, lead, member, is_lead) in enumerate(zip(accs, leads, (in0, in1, in2), (is0, is1, is2))):
             out[f"acc_{tag}{g}"] = acc + m * (w * member)
-            out[f"lead_{tag}{g}"] = ops.select_vec(is_lead, b[f"N_{tag}"], lead)
+            out[f"lead_{tag}{g}"] = ops.select_vec(is_lead, b[f"N_{tag}0"], lead)
             e_parts.append(ops.select(is_lead, b[f"e_{tag}"], ops.dot(e_lead, _UNIT[g])))
             a_parts.append(ops.select(is_lead, b[f"alpha_{tag}"], ops.dot(a_lead, _UNIT[g])))
         out[f"lead_e{tag}"] = ops.combine(*e_parts)
@@ -397,23 +448,21 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
         res.diffuse = diffuse_colour(ops, P, d, wavelengths)
     if not plan.specular:
         return res
-    blocks = [ops.call("channel", channel_block,
-                       dict(r1=r1, lam=float(lam), e0=P["e0"], e1=P["e1"], ks=P["ks"], r0=P["r0"],
-                            n0=n0, n1=n1, v=v, d=d), lobe=plan.lobe)
-              for r1, lam in zip(P["r1"], wavelengths)]
-    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, tuple(b["AR"] for b in blocks)))
+    r1 = ops.combine(*P["r1"])
+    b = ops.call("channels", channel_block,
+                 dict(r1=r1, lam=tuple(float(x) for x in wavelengths), e0=P["e0"], e1=P["e1"], ks=P["ks"],
+                      r0=P["r0"], n0=n0, n1=n1, v=v, d=d), lobe=plan.lobe, shared=not plan.dispersion)
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
     for tag, label in (("T", "transmit"), ("I", "interfere")):
+        e, alpha, w = (ops.components(b[f"{k}_{tag}"]) for k in ("e", "alpha", "w"))
         if plan.dispersion:
-            for c, b in enumerate(blocks):
-                w = [0.0, 0.0, 0.0]
-                w[c] = b[f"w_{tag}"]
-                res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}"], b[f"e_{tag}"], b[f"alpha_{tag}"],
-                                          tuple(w)))
+            # Each channel's lobe has its own centre and exponent: a closure per channel.
+            for c in range(3):
+                weight = tuple(w[c] if k == c else 0.0 for k in range(3))
+                res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}{c}"], e[c], alpha[c], weight))
         else:
-            # Equal indices: every channel's lobe has the same centre and exponent (green's used).
-            g = blocks[1]
-            res.glossy.append(Closure(label, g[f"N_{tag}"], g[f"e_{tag}"], g[f"alpha_{tag}"],
-                                      tuple(b[f"w_{tag}"] for b in blocks)))
+            # Equal indices: every channel's lobe has the same centre and exponent.
+            res.glossy.append(Closure(label, b[f"N_{tag}0"], e[1], alpha[1], w))
     return res
 
 
