@@ -110,8 +110,7 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan):
     else:
         node = tree.nodes.new("ShaderNodeScript")
         node.mode = "INTERNAL"
-        node.script = osl_backend.text_for(plan)
-        osl_backend.compile_script_node(node)
+        osl_backend.compile_script_node(node, script=osl_backend.text_for(plan))
     node.name = node.label = SHADER_NODE
     node.width = 220
     node.location = (out.location[0] - 300, out.location[1])
