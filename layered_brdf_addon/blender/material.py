@@ -225,9 +225,9 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
     else:
         node = tree.nodes.new("ShaderNodeScript")
         node.mode = "INTERNAL"
-        node.script = osl_backend.text_for(plan)
-        node.script[TEXT_KEY] = True
-        osl_backend.compile_script_node(node)
+        text = osl_backend.text_for(plan)
+        text[TEXT_KEY] = True
+        osl_backend.compile_script_node(node, script=text)
     node.name = name
     node.label = label
     node.width = width

@@ -9,8 +9,7 @@ import bpy
 
 from ..backends.osl_shader import shader_source
 from ..model.plan import EffectPlan
-from . import paths
-
+from . import paths, tempdirs
 
 
 def source(plan: EffectPlan) -> str:
@@ -43,8 +42,15 @@ class OSLCompileError(RuntimeError):
     pass
 
 
-def compile_script_node(node) -> None:
-    """Compile ``node``'s script and create its sockets; raise with the compiler's message."""
+def compile_script_node(node, script=None) -> None:
+    """Compile ``node``'s script and create its sockets; raise with the compiler's message.
+
+    With ``script`` (an internal text), assign it first: the assignment compiles too
+    (Cycles' node update).  Cycles compiles an internal text into ``tmp*.osl``/``tmp*.oso``
+    files of the temp folder and leaves the ``.oso``; here both compiles run in a private
+    folder (:func:`.tempdirs.private_tempdir`) that is removed afterwards.  Nothing is
+    ever written next to the add-on's own files.
+    """
     _ensure_oslquery()
     import addon_utils
 
@@ -57,7 +63,10 @@ def compile_script_node(node) -> None:
         if "ERROR" in kind:
             errors.append(message)
 
-    ok = cycles_osl.update_script_node(node, report)
+    with tempdirs.private_tempdir("osl"):
+        if script is not None:
+            node.script = script
+        ok = cycles_osl.update_script_node(node, report)
     if errors or ok is False:
         raise OSLCompileError("OSL compilation failed: " + "; ".join(errors or ["unknown error"]))
 

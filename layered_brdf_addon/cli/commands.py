@@ -265,17 +265,13 @@ def cmd_batch(ns: argparse.Namespace) -> int:
     """``batch``: run the jobs of a job file and print a summary table."""
     from .job_files import load_job_file
     from .requests import float_option, int_option
-    from .runner import exit_code, run_batch
-    from .sidecar import write_json
-    from .staging import StagedOutputs
+    from .runner import check_report_target, exit_code, run_batch, write_report
 
     n_jobs = int_option("jobs", ns.jobs, 1, 4096)
     if ns.scheduler is not None and n_jobs > 1:
         raise ParameterError("jobs", n_jobs, "1 with --scheduler (the cluster's workers set the parallelism)")
     timeout = float_option("timeout", ns.timeout, 1.0, 1e7) if ns.timeout is not None else None
-    report = Path(ns.report).absolute() if ns.report else None
-    if report is not None and report.suffix.lower() != ".json":
-        raise ParameterError("report", ns.report, "a path ending in .json")
+    report = check_report_target(ns.report) if ns.report else None
     jobs = load_job_file(ns.jobfile, output_dir=ns.output_dir or Path("out") / "batch", report=report)
     results = run_batch(jobs, n_jobs=n_jobs, scheduler=ns.scheduler, timeout=timeout, progress=ns.progress)
     rows = []
@@ -290,9 +286,12 @@ def cmd_batch(ns: argparse.Namespace) -> int:
     failed = sum(not r.ok for r in results)
     print(f"\n{len(results) - failed} of {len(results)} jobs rendered" + (f", {failed} failed" if failed else ""))
     if report is not None:
-        with StagedOutputs([report]) as staged:
-            write_json(staged.temp(report), {"jobfile": str(Path(ns.jobfile).absolute()),
-                                             "results": [r.to_dict() for r in results]})
+        try:
+            write_report(report, {"jobfile": str(Path(ns.jobfile).absolute()),
+                                  "results": [r.to_dict() for r in results]})
+        except OSError as e:
+            print(f"{PROG}: error: could not write --report {report}: {e}", file=sys.stderr)
+            return EXIT_FAILED
     return exit_code(results)
 
 

@@ -245,11 +245,14 @@ def title_for(s: GallerySettings) -> str:
 def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
                    log: Callable[[str], None] | None = None) -> GalleryResult:
     """Render every preset of ``s`` in one scene and write the sheet, the EXR and a sidecar."""
+    from ..blender import tempdirs
     from .render_job import render_outputs, sidecar
     from .staging import InterruptGuard
 
     t_start = time.perf_counter()
+    tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
     with InterruptGuard() as guard:
+        guard.add_cleanup(tempdirs.remove_process_tempdir)
         import bpy
 
         from ..blender import scene as S

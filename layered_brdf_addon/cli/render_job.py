@@ -106,9 +106,11 @@ def _osl_aov_layers(scene, guard) -> dict[str, dict[str, Any]]:
     import tempfile
 
     from ..blender import scene as S
+    from ..blender import tempdirs
     from ..blender.material import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL
 
-    private = tempfile.mkdtemp(prefix="layered_brdf_aov_")
+    tempdirs.sweep_stale()
+    private = str(tempdirs.owned_dir("aov"))
     cleanup = lambda: shutil.rmtree(private, ignore_errors=True)  # noqa: E731
     guard.add_cleanup(cleanup)
     saved = tempfile.tempdir
@@ -192,8 +194,12 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
     are complete); SIGINT and SIGTERM stop the render at once and leave no file
     behind (exit code 130).  Returns the sidecar.
     """
+    from ..blender import tempdirs
+
     t_start = time.perf_counter()
+    tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
     with InterruptGuard() as guard:
+        guard.add_cleanup(tempdirs.remove_process_tempdir)
         import bpy
 
         from ..blender import scene as S

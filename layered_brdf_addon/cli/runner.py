@@ -174,21 +174,75 @@ def run_batch(jobs: Sequence[Job], *, n_jobs: int = 1, scheduler: str | None = N
     finally:
         bar.close()
         if client is not None:
-            client.close()
+            try:
+                client.close(timeout=CONNECT_TIMEOUT)
+            except Exception:
+                pass
         if cluster is not None:
             cluster.close()
     return [results[j.index] for j in jobs]
+
+
+CONNECT_TIMEOUT = 10.0  # seconds to reach a scheduler and get its answer
+NO_WORKER_GRACE = 60.0  # seconds without a worker (or the scheduler) before the jobs left are given up
+
+
+def _scheduler_error(address: str, why: str) -> ParameterError:
+    return ParameterError("scheduler", address, f"the address of a running Dask scheduler, e.g. "
+                          f"tcp://host:8786 (--scheduler: {why})")
+
+
+def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> dict[str, Any]:
+    """Ask ``address`` who it is, within ``timeout`` seconds in all; return the scheduler's identity.
+
+    Dask's own client trusts the peer: an HTTP server's reply reads as a frame length of
+    exabytes (MemoryError), and a server that accepts and never answers keeps it waiting
+    past its connect timeout.  This asks once, under one deadline, and raises
+    :class:`ParameterError` naming ``--scheduler`` for anything but a Dask scheduler.
+    """
+    import asyncio
+    import logging
+
+    from distributed.comm import connect
+
+    async def ask() -> Any:
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "n_workers": 0, "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    log = logging.getLogger("distributed")
+    level = log.level
+    log.setLevel(logging.CRITICAL)  # its errors would print tracebacks of the garbage it read
+    try:
+        reply = asyncio.run(asyncio.wait_for(ask(), timeout))
+    except (asyncio.TimeoutError, TimeoutError):
+        raise _scheduler_error(address, f"no answer from it within {timeout:g} s") from None
+    except MemoryError:
+        raise _scheduler_error(address, "it answered, but not in Dask's protocol (is it an HTTP server?)") from None
+    except ValueError as e:
+        raise _scheduler_error(address, f"not a valid address: {e}") from None
+    except Exception as e:  # refused, reset, closed, unreadable reply: all "not a scheduler"
+        raise _scheduler_error(address, f"{e.__class__.__name__}: {e}".rstrip(": ")) from None
+    finally:
+        log.setLevel(level)
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        kind = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
+        raise _scheduler_error(address, f"it answered as {kind!r}, not as a Dask scheduler")
+    return reply
 
 
 def _connect(scheduler: str | None, n_jobs: int):
     from dask.distributed import Client, LocalCluster
 
     if scheduler is not None:
+        probe_scheduler(scheduler)
         try:
-            return Client(scheduler, timeout="10s"), None
-        except (OSError, TimeoutError, ValueError) as e:
-            raise ParameterError("scheduler", scheduler, "the address of a running Dask scheduler, e.g. "
-                                 f"tcp://host:8786 ({e.__class__.__name__}: {e})") from None
+            return Client(scheduler, timeout=f"{CONNECT_TIMEOUT:g}s"), None
+        except Exception as e:
+            raise _scheduler_error(scheduler, f"{e.__class__.__name__}: {e}") from None
     import logging
     import warnings
 
@@ -199,29 +253,143 @@ def _connect(scheduler: str | None, n_jobs: int):
     return Client(cluster), cluster
 
 
-def _run_on_dask(jobs: Sequence[Job], client, *, timeout: float | None):
-    """Submit every job as a Dask task; yield ``(job, result)`` as they complete."""
-    from dask.distributed import as_completed
+def _cluster_state(client) -> tuple[bool, int]:
+    """(the scheduler answered, its number of workers), asking with a short deadline."""
+    if client.status not in ("running", "connecting"):
+        return False, 0
+    try:
+        info = client.sync(client.scheduler.identity, n_workers=0, callback_timeout=5.0)
+        return True, int(info.get("n_workers", 0))
+    except Exception:
+        return False, 0
 
+
+def _run_on_dask(jobs: Sequence[Job], client, *, timeout: float | None, poll: float = 0.25):
+    """Submit every job as a Dask task; yield ``(job, result)`` as they complete.
+
+    Every few seconds the scheduler is asked how many workers it has: after
+    ``min(timeout, NO_WORKER_GRACE)`` seconds with none (all died or left) or without an
+    answer from the scheduler, the jobs not done are given up (status ``cancelled``).  A
+    worker that dies while others live costs nothing: Dask reruns its tasks elsewhere.
+    """
     token = uuid.uuid4().hex[:8]
     futures = {}
+    grace = min(timeout, NO_WORKER_GRACE) if timeout is not None else NO_WORKER_GRACE
     try:
         for job in jobs:
             fut = client.submit(run_job, job.name, job.request.to_argv(), str(job.request.output), timeout,
                                 key=f"layered-brdf-{token}-{job.index}", pure=False, retries=0)
             futures[fut] = job
-        for fut in as_completed(list(futures)):
-            job = futures[fut]
-            try:
-                res = fut.result()
-            except Exception as e:  # the worker died or the task could not run
-                remove_stale_temps(job.request.output)
-                res = JobResult(job.name, "crashed", error=f"{e.__class__.__name__}: {e}")
-            yield job, res
+        pending = list(futures)
+        trouble_since: float | None = None
+        next_check = time.monotonic() + 2.0
+        while pending:
+            done = [f for f in pending if f.done()]
+            for fut in done:
+                pending.remove(fut)
+                job = futures[fut]
+                try:
+                    res = fut.result()
+                except Exception as e:  # the worker died or the task could not run
+                    remove_stale_temps(job.request.output)
+                    res = JobResult(job.name, "crashed", error=f"{e.__class__.__name__}: {e}")
+                yield job, res
+            if done or not pending:
+                continue
+            now = time.monotonic()
+            if now >= next_check:
+                answered, n_workers = _cluster_state(client)
+                now = time.monotonic()
+                next_check = now + 2.0
+                if answered and n_workers > 0:
+                    trouble_since = None
+                else:
+                    trouble_since = trouble_since if trouble_since is not None else now
+                    if now - trouble_since >= grace:
+                        why = (f"no Dask worker alive for {grace:g} s (all died or left)" if answered
+                               else f"no answer from the Dask scheduler for {grace:g} s")
+                        print(f"layered-brdf: error: {why}; {len(pending)} job(s) not run", file=sys.stderr)
+                        if answered:
+                            try:
+                                client.cancel(pending, force=True)
+                            except Exception:
+                                pass
+                        for fut in pending:
+                            job = futures[fut]
+                            remove_stale_temps(job.request.output)
+                            yield job, JobResult(job.name, "cancelled", error=f"not run: {why}")
+                        return
+            time.sleep(poll)
     except BaseException:
-        client.cancel(list(futures), force=True)
+        try:
+            client.cancel(list(futures), force=True)
+        except Exception:
+            pass
         for job in jobs:
             remove_stale_temps(job.request.output)
+        raise
+
+
+def check_report_target(text: str | os.PathLike) -> Path:
+    """The absolute path of ``--report``, checked before any job runs.
+
+    It must end in .json, must not be a folder, and its folder must exist (or be
+    creatable under an existing folder) and take a new file: a probe file is created
+    and removed there.  Raises :class:`ParameterError` naming ``--report``.
+    """
+    import tempfile
+
+    path = Path(text).absolute()
+
+    def bad(why: str) -> ParameterError:
+        return ParameterError("report", str(text), f"a writable .json file path (--report: {why})")
+
+    if path.suffix.lower() != ".json":
+        raise ParameterError("report", str(text), "a path ending in .json (--report)")
+    if path.is_dir():
+        raise bad(f"{path} is a folder")
+    if path.exists() and not path.is_file():
+        raise bad(f"{path} is not a regular file")
+    folder = path.parent
+    while not folder.exists():
+        folder = folder.parent
+    if not folder.is_dir():
+        raise bad(f"{folder} is not a folder")
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=f".{path.name}.", suffix=".probe"):
+            pass
+    except OSError as e:
+        raise bad(f"cannot create a file in {folder}: {e.strerror or e}") from None
+    return path
+
+
+def write_report(path: str | os.PathLike, data: Any) -> None:
+    """Write the JSON report atomically: a temporary file in the same folder, renamed over ``path``.
+
+    A reader sees the old report or the complete new one, never a partial file; on an
+    error nothing is left but the old report (OSError is raised).
+    """
+    import tempfile
+
+    from .sidecar import to_jsonable
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(json.dumps(to_jsonable(data), indent=2) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)  # mkstemp's 0600 -> what a plain open() would give
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
         raise
 
 
