@@ -279,14 +279,15 @@ def render_passes(scene=None, keep: str | os.PathLike | None = None) -> Passes:
 
 
 def _scripted_materials(scene):
-    from .material import SHADER_NODE
+    """The layered materials of ``scene`` that run the OSL shader (found by the add-on's stamp)."""
+    from .material import shader_node
 
     mats = set()
     for obj in scene.objects:
         for slot in getattr(obj, "material_slots", []):
             m = slot.material
             if m is not None and m.node_tree is not None:
-                node = m.node_tree.nodes.get(SHADER_NODE)
+                node = shader_node(m)
                 if node is not None and node.bl_idname == "ShaderNodeScript":
                     mats.add(m)
     return mats
@@ -299,7 +300,7 @@ def render_passes_osl(scene=None, keep: str | os.PathLike | None = None) -> Pass
     rendered in extra passes that route the script's outputs into an emission shader
     (normals encoded as ``0.5 + 0.5 n``); the materials are restored afterwards.
     """
-    from .material import SHADER_NODE
+    from .material import shader_node
 
     scene = scene or bpy.context.scene
     beauty = render_passes(scene, keep)
@@ -308,7 +309,7 @@ def render_passes_osl(scene=None, keep: str | os.PathLike | None = None) -> Pass
         saved = []
         for m in _scripted_materials(scene):
             tree = m.node_tree
-            node = tree.nodes[SHADER_NODE]
+            node = shader_node(m)
             out_node = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
             old = [l.from_socket for l in out_node.inputs["Surface"].links]
             emit = tree.nodes.new("ShaderNodeEmission")
