@@ -329,6 +329,11 @@ class NodeOps:
         """``x``, or 0 where it is NaN: ``Maximum(0, x) + Minimum(0, x)`` (see clamp_input)."""
         return self.maximum(0.0, x) + self.minimum(0.0, x)
 
+    def triple(self, x, y, z):
+        """A constant channel triple (a Combine XYZ node, which Cycles folds)."""
+        n, d = self.node("ShaderNodeCombineXYZ", {"X": float(x), "Y": float(y), "Z": float(z)})
+        return self.out(n, d, 0, "vector")
+
     def components(self, v):
         """The three scalars of a vector (Separate XYZ)."""
         n, d = self.node("ShaderNodeSeparateXYZ", {"Vector": v})

@@ -304,6 +304,9 @@ class OslOps:
     def nan_to_zero(self, x):
         return self.call_expr("nan_to_zero", (x,), "float")
 
+    def triple(self, x, y, z):
+        return self.atom(_vector_literal((x, y, z)), "vector")
+
     def components(self, v):
         return tuple(self.emit("float", f"{self.use(v, PREC_ATOM)}[{k}]") for k in range(3))
 

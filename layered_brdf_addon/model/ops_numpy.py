@@ -282,3 +282,8 @@ def components(v):
 @_elementwise
 def abs(x):  # noqa: A001 - the ops interface's name
     return np.abs(x)
+
+
+def triple(x, y, z):
+    """A constant channel triple."""
+    return vec(np.array([x, y, z], dtype=float))

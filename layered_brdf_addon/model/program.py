@@ -303,9 +303,10 @@ def diffuse_rho(ops, r1, r0, lam, d):
 
 
 def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
-    """``kd base rho_d`` per channel (eq. 14)."""
-    return tuple(ops.named(f"diffuse_{c}", P["kd"] * base * diffuse_rho(ops, r1, P["r0"], lam, d))
-                 for c, r1, lam, base in zip("rgb", P["r1"], wavelengths, P["base"]))
+    """``kd base rho_d`` per channel (eq. 14), the three channels as one triple."""
+    rho = diffuse_rho(ops, ops.combine(*P["r1"]), P["r0"], ops.triple(*wavelengths), d)
+    colour = ops.named("diffuse_colour", ops.combine(*P["base"]) * (P["kd"] * rho))
+    return ops.components(colour)
 
 
 def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True, shared=False):
@@ -595,10 +596,8 @@ def program_inputs(P, tint=(1.0, 1.0, 1.0)):
 def base_weight(ops, r1, r0, cos_v):
     """What the top boundary transmits to the artist's base shader, ``1 - F(v)``: the mean
     over the channels (a Mix Shader takes one factor)."""
-    f_sum = 0.0
-    for r in r1:
-        f_sum = f_sum + schlick(ops, cos_v, fresnel_f0(ops, r, r0))
-    return 1.0 - f_sum * (1.0 / 3.0)
+    F = schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*r1), r0))
+    return 1.0 - ops.dot(F, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
 
 
 def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
