@@ -32,7 +32,7 @@ EXT_ZIP = dist/layered_brdf-$(shell sed -n 's/^version *= *"\(.*\)"/\1/p' blende
 WHICH = $(PY) -c "import importlib.metadata as m, platform; \
     print('Blender', m.version('bpy'), '(bpy) on Python', platform.python_version(), 'in $(VENV)')"
 
-.PHONY: demo test bench extension clean which generated
+.PHONY: demo test bench bench-scene extension clean which generated
 
 $(STAMP): pyproject.toml
 	@test -n "$(PYTHON)" || { echo "Blender $(BLENDER) needs Python $(if $(filter 5.2,$(BLENDER)),3.13,3.11), not found" >&2; exit 1; }
@@ -59,6 +59,10 @@ generated: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reference.py
+
+# Render cost per sample on a realistic scene (Suzanne, HDRI + sun; Cycles CPU and EEVEE), 10-15 min.
+bench-scene: $(STAMP)
+	$(PY) benchmarks/bench_scene.py $(BENCH_ARGS)
 
 # Blender's extension tool and its tags file are found in the installed bpy.
 extension: $(STAMP)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from report import cost_table  # benchmarks/ is on sys.path when the script runs
+from timing import DIFFUSE, PRINCIPLED, cost_per_sample, stock_material, thin_film_inputs
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -47,33 +48,15 @@ def per_sample(S, s1: int, s2: int, repeats: int) -> float:
     _time_render(S, 1)  # warm: kernels, shader compilation
     best1 = min(_time_render(S, s1) for _ in range(repeats))
     best2 = min(_time_render(S, s2) for _ in range(repeats))
-    return max(best2 - best1, 1e-9) / (s2 - s1)
+    return max(cost_per_sample(best1, best2, s1, s2), 1e-9)
 
 
 def principled_thin_film(obj):
-    import bpy
-
-    mat = bpy.data.materials.new("PrincipledThinFilm")
-    nt = mat.node_tree
-    bsdf = nt.nodes.get("Principled BSDF") or nt.nodes.new("ShaderNodeBsdfPrincipled")
-    bsdf.inputs["Thin Film Thickness"].default_value = 300.0
-    bsdf.inputs["Thin Film IOR"].default_value = 1.33
-    bsdf.inputs["Roughness"].default_value = 0.2
-    out = nt.nodes.get("Material Output") or nt.nodes.new("ShaderNodeOutputMaterial")
-    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
-    obj.data.materials.append(mat)
+    obj.data.materials.append(stock_material("PrincipledThinFilm", PRINCIPLED, thin_film_inputs(300.0, 1.33, 0.2)))
 
 
 def plain_diffuse(obj):
-    import bpy
-
-    mat = bpy.data.materials.new("Diffuse")
-    nt = mat.node_tree
-    nt.nodes.clear()
-    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    nt.links.new(d.outputs[0], out.inputs["Surface"])
-    obj.data.materials.append(mat)
+    obj.data.materials.append(stock_material("Diffuse", DIFFUSE))
 
 
 def run(presets, size, s1, s2, repeats, spectral_preset="fig6_medium",
