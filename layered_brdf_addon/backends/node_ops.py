@@ -10,56 +10,22 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from .symbolic import Arithmetic, kind_of
+
 Number = (int, float)
 
 
-class Expr:
+class Expr(Arithmetic):
+    """An output socket of the tree being built, and its kind."""
+
     __slots__ = ("ops", "socket", "kind", "depth")
+    OPERATORS = {"+": "ADD", "-": "SUBTRACT", "*": "MULTIPLY", "/": "DIVIDE"}
 
     def __init__(self, ops: "NodeOps", socket, kind: str, depth: int = 0):
         self.ops, self.socket, self.kind, self.depth = ops, socket, kind, depth
 
-    # arithmetic ----------------------------------------------------------
-    def _bin(self, other, op, reverse=False):
-        a, b = (other, self) if reverse else (self, other)
-        return self.ops.binary(op, a, b)
 
-    def __add__(self, o):
-        return self._bin(o, "ADD")
-
-    def __radd__(self, o):
-        return self._bin(o, "ADD", True)
-
-    def __sub__(self, o):
-        return self._bin(o, "SUBTRACT")
-
-    def __rsub__(self, o):
-        return self._bin(o, "SUBTRACT", True)
-
-    def __mul__(self, o):
-        return self._bin(o, "MULTIPLY")
-
-    def __rmul__(self, o):
-        return self._bin(o, "MULTIPLY", True)
-
-    def __truediv__(self, o):
-        return self._bin(o, "DIVIDE")
-
-    def __rtruediv__(self, o):
-        return self._bin(o, "DIVIDE", True)
-
-    def __neg__(self):
-        return self * -1.0
-
-
-def _kind(x) -> str:
-    if isinstance(x, Expr):
-        return x.kind
-    if isinstance(x, Number):
-        return "float"
-    if isinstance(x, (tuple, list)) and len(x) == 3:
-        return "vector"
-    raise TypeError(f"not a shader value: {x!r}")
+_kind = kind_of
 
 
 class NodeOps:

@@ -15,6 +15,8 @@ import re
 import sys
 from dataclasses import dataclass, field
 
+from .symbolic import Arithmetic, kind_of
+
 Number = (int, float)
 
 # Identifiers a temporary may not take: OSL keywords, globals and the functions we call.
@@ -44,51 +46,16 @@ def _vector_literal(t) -> str:
     return f"vector({', '.join(literal(c) for c in t)})"
 
 
-def _kind(x) -> str:
-    if isinstance(x, Val):
-        return x.kind
-    if isinstance(x, Number):
-        return "float"
-    if isinstance(x, (tuple, list)) and len(x) == 3:
-        return "vector"
-    raise TypeError(f"not a shader value: {x!r}")
+_kind = kind_of
 
 
-class Val:
+class Val(Arithmetic):
     """An OSL expression: a reference to a statement (a token) or an atom (a global, say)."""
 
     __slots__ = ("ops", "ref", "kind", "token")
 
     def __init__(self, ops, ref: str, kind: str, token: int | None = None):
         self.ops, self.ref, self.kind, self.token = ops, ref, kind, token
-
-    def _bin(self, other, op, reverse=False):
-        a, b = (other, self) if reverse else (self, other)
-        return self.ops.binary(op, a, b)
-
-    def __add__(self, o):
-        return self._bin(o, "+")
-
-    def __radd__(self, o):
-        return self._bin(o, "+", True)
-
-    def __sub__(self, o):
-        return self._bin(o, "-")
-
-    def __rsub__(self, o):
-        return self._bin(o, "-", True)
-
-    def __mul__(self, o):
-        return self._bin(o, "*")
-
-    def __rmul__(self, o):
-        return self._bin(o, "*", True)
-
-    def __truediv__(self, o):
-        return self._bin(o, "/")
-
-    def __rtruediv__(self, o):
-        return self._bin(o, "/", True)
 
     def __neg__(self):
         return self.ops.emit(self.kind, f"-{self.ops.use(self, PREC_UNARY + 1)}", PREC_UNARY)
