@@ -205,17 +205,14 @@ def fold_interference(ops, AR, AT, AI, eR, eT, eI, dRT, dRI, dTI):
 # A channel value is a scalar (one wavelength, the spectral modes) or a triple (the three
 # RGB channels at once, one component each: a shader evaluates them as one vector).  The
 # arithmetic is the same; only the directions differ per channel, so they are computed
-# channel by channel (once, when the indices are equal and every channel takes one path).
-def channels(ops, x, shared=False):
-    """The per-channel scalars of a channel value (the middle one only when ``shared``)."""
-    if not ops.is_vector(x):
-        return [x]
-    parts = list(ops.components(x))
-    return [parts[1]] if shared else parts
+# channel by channel.
+def channels(ops, x):
+    """The per-channel scalars of a channel value."""
+    return list(ops.components(x)) if ops.is_vector(x) else [x]
 
 
 def gather(ops, parts):
-    """A channel value from per-channel scalars (one part: every channel the same)."""
+    """A channel value from per-channel scalars."""
     if len(parts) == 3:
         return ops.combine(*parts)
     return parts[0]
@@ -246,7 +243,7 @@ def light_path(ops, eta, s_o, entering, cos_v, n0, n1, v, r_v):
 
 
 @shader_function
-def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, interference=True, shared=False):
+def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, interference=True):
     """Amplitudes, centres and exponents of the three lobes of each channel (eqs. 3-11).
     ``r1``, ``lam``: a scalar (one channel) or a triple (three)."""
     f = fresnel_f0(ops, r1, r0)
@@ -259,8 +256,7 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     s_o = ops.sqrt(k_o)  # <t_o, -n0>
     entering = ops.gt(k_o, 0.0) * ops.gt(cos_v, 0.0)
     paths = [light_path(ops, e, s, ok, cos_v, n0, n1, v, r_v)
-             for e, s, ok in zip(channels(ops, eta, shared), channels(ops, s_o, shared),
-                                 channels(ops, entering, shared))]
+             for e, s, ok in zip(channels(ops, eta), channels(ops, s_o), channels(ops, entering))]
     l_stars = [p[0] for p in paths]
     cos_ls = spread(ops, gather(ops, [ops.clamp(ops.dot(ls, n0), 0.0, 1.0) for ls in l_stars]), r1)
     # Eq. 11 and total internal reflection on either crossing: no path, T = 0.
@@ -276,7 +272,7 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     # Interference, eq. 5: sqrt(R T) of two Phong lobes is a lobe of exponent
     # (e0 + e1')/2 about their weighted centre; phase from eq. 3 at that centre.
     w_sum = ops.maximum(e0 + e1p, 1e-6)
-    c_Is = [ops.normalize(r_v * e0 + ls * e, r_v) for ls, e in zip(l_stars, channels(ops, e1p, shared))]
+    c_Is = [ops.normalize(r_v * e0 + ls * e, r_v) for ls, e in zip(l_stars, channels(ops, e1p))]
     d_RT = spread(ops, gather(ops, [angle2(ops, r_v, ls) for ls in l_stars]), r1)
     atten = ops.exp(-(e0 * e1p) / (4.0 * w_sum) * d_RT)
     cos_ci = spread(ops, gather(ops, [ops.clamp(ops.dot(c, n0), 0.0, 1.0) for c in c_Is]), r1)
@@ -309,20 +305,18 @@ def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
     return ops.components(colour)
 
 
-def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True, shared=False):
+def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True):
     """The channels' lobes (eqs. 3-11), the fold, and the normals, exponents, alphas and
     weights of their transmitted and interference closures.  A lobe centred on the
     direction c is a closure about normalize(v + c).  ``r1``, ``lam``: a scalar (one
-    wavelength) or a triple (the RGB channels); ``shared``: equal indices, one direction
-    per lobe for every channel.  ``N_T0``.., ``N_I0``..: the closure normals, one per
-    channel (one when shared or for a scalar)."""
+    wavelength) or a triple (the RGB channels).  ``N_T0``.., ``N_I0``..: the closure
+    normals, one per channel."""
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     r_v = n0 * (2.0 * ops.dot(v, n0)) - v
-    t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference,
-                      shared=shared)
+    t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference)
     AR, AT, AI = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], t["d_RT"], t["d_RI"],
                                    t["d_TI"])
-    n = 1 if shared or not ops.is_vector(r1) else 3
+    n = 3 if ops.is_vector(r1) else 1
     out = dict(AR=AR)
     for tag, amp, centre, e in (("T", AT, "l_star", t["eT"]), ("I", AI, "c_I", t["eI"])):
         normals = [ops.normalize(v + t[f"{centre}{k}"], n0) for k in range(n)]
@@ -449,21 +443,30 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
         res.diffuse = diffuse_colour(ops, P, d, wavelengths)
     if not plan.specular:
         return res
-    r1 = ops.combine(*P["r1"])
-    b = ops.call("channels", channel_block,
-                 dict(r1=r1, lam=tuple(float(x) for x in wavelengths), e0=P["e0"], e1=P["e1"], ks=P["ks"],
-                      r0=P["r0"], n0=n0, n1=n1, v=v, d=d), lobe=plan.lobe, shared=not plan.dispersion)
-    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
-    for tag, label in (("T", "transmit"), ("I", "interfere")):
-        e, alpha, w = (ops.components(b[f"{k}_{tag}"]) for k in ("e", "alpha", "w"))
-        if plan.dispersion:
-            # Each channel's lobe has its own centre and exponent: a closure per channel.
+    common = dict(e0=P["e0"], e1=P["e1"], ks=P["ks"], r0=P["r0"], n0=n0, n1=n1, v=v, d=d)
+    if plan.dispersion:
+        # Each channel's lobes have their own centres and exponents: the three channels as
+        # one triple, a closure per channel and lobe.
+        b = ops.call("channels", channel_block,
+                     dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), **common),
+                     lobe=plan.lobe)
+        res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
+        for tag, label in (("T", "transmit"), ("I", "interfere")):
+            e, alpha, w = (ops.components(b[f"{k}_{tag}"]) for k in ("e", "alpha", "w"))
             for c in range(3):
                 weight = tuple(w[c] if k == c else 0.0 for k in range(3))
                 res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}{c}"], e[c], alpha[c], weight))
-        else:
-            # Equal indices: every channel's lobe has the same centre and exponent.
-            res.glossy.append(Closure(label, b[f"N_{tag}0"], e[1], alpha[1], w))
+        return res
+    # Equal indices: every channel's lobe has the same centre and exponent (green's are
+    # used); each channel keeps the weight computed from its own wavelength.  One scalar
+    # block per channel: a shader compiler merges what the channels share.
+    blocks = [ops.call("channel", channel_block, dict(r1=r1, lam=float(lam), **common), lobe=plan.lobe)
+              for r1, lam in zip(P["r1"], wavelengths)]
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, tuple(b["AR"] for b in blocks)))
+    g = blocks[1]
+    for tag, label in (("T", "transmit"), ("I", "interfere")):
+        res.glossy.append(Closure(label, g[f"N_{tag}0"], g[f"e_{tag}"], g[f"alpha_{tag}"],
+                                  tuple(b[f"w_{tag}"] for b in blocks)))
     return res
 
 
