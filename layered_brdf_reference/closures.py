@@ -55,17 +55,48 @@ def beckmann_lambda(alpha2, cos_n):
     return np.where(t < 0.39, 0.0, lam)
 
 
-def beckmann_eval(N, v, l, alpha):
-    """Cycles' Beckmann closure (no Fresnel): ``D / (4 cosNV (1 + Lambda_V + Lambda_L))``, cosine included."""
-    alpha2 = alpha * alpha
+def glossy_alphas(alpha, aniso):
+    """Cycles' Glossy BSDF: ``alpha_x`` (along the tangent) and ``alpha_y`` from alpha =
+    Roughness^2 and Anisotropy (clamped to +-0.99; isotropic within 1e-4 of 0), each
+    saturated to [0, 1] by the closure's setup."""
+    alpha = np.asarray(alpha, dtype=float)
+    a = np.clip(np.asarray(aniso, dtype=float), -0.99, 0.99)
+    ax = np.where(a < 0.0, alpha / (1.0 + a), alpha * (1.0 - a))
+    ay = np.where(a < 0.0, alpha * (1.0 + a), alpha / (1.0 - a))
+    iso = np.abs(a) <= 1e-4
+    ax = np.where(iso, alpha, ax)
+    ay = np.where(iso, alpha, ay)
+    return np.clip(ax, 0.0, 1.0), np.clip(ay, 0.0, 1.0)
+
+
+def _lambda_from(t):
+    a = 1.0 / np.sqrt(np.maximum(t, 1e-30))
+    lam = ((0.396 * a - 1.259) * a + 1.0) / ((2.181 * a + 3.535) * a)
+    return np.where(t < 0.39, 0.0, lam)
+
+
+def beckmann_eval(N, v, l, alpha, aniso=0.0, T=None):
+    """Cycles' Beckmann closure (no Fresnel): ``D / (4 cosNV (1 + Lambda_V + Lambda_L))``, cosine
+    included; anisotropic about the tangent ``T`` (frame as Cycles' make_orthonormals_tangent)."""
+    ax, ay = glossy_alphas(alpha, aniso)
+    if T is None:
+        T = np.broadcast_to(np.array([1.0, 0.0, 0.0]), np.shape(N))
+    Y = safe_normalize(np.cross(N, np.broadcast_to(T, np.shape(N))), N)
+    X = np.cross(Y, N)
     cos_nv = dot(N, v)
     cos_nl = dot(N, l)
     h = safe_normalize(v + l, N)
-    cos_nh2 = np.minimum(dot(N, h) ** 2, 1.0)
+    hz, hx, hy = dot(h, N), dot(h, X), dot(h, Y)
     with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-        D = 1.0 / (np.exp((1.0 - cos_nh2) / np.maximum(cos_nh2 * alpha2, 1e-300)) * np.pi * alpha2 * cos_nh2 ** 2)
-    D = np.where(np.isfinite(D), D, 0.0)
-    val = D / (4.0 * np.maximum(cos_nv, 1e-30) * (1.0 + beckmann_lambda(alpha2, cos_nv) + beckmann_lambda(alpha2, cos_nl)))
+        e = (hx * hx / (ax * ax) + hy * hy / (ay * ay)) / np.maximum(hz * hz, 1e-300)
+        D = np.exp(-e) / (np.pi * ax * ay * hz ** 4)
+
+        def lam(w):
+            wz, wx, wy = dot(w, N), dot(w, X), dot(w, Y)
+            return _lambda_from(((ax * wx) ** 2 + (ay * wy) ** 2) / np.maximum(wz * wz, 1e-30))
+
+        val = D / (4.0 * np.maximum(cos_nv, 1e-30) * (1.0 + lam(v) + lam(l)))
+    val = np.where(np.isfinite(val) & (hz > 0.0), val, 0.0)
     return np.where((cos_nv > 0.0) & (cos_nl >= 0.0), val, 0.0)
 
 
@@ -142,7 +173,8 @@ def evaluate_closures(result, n0, v, l, lobe_kind="beckmann", ng=None, bump_corr
         if lobe_kind == "phong":
             val = phong_ramp_eval(N, v, l, np.asarray(cl.exponent))
         else:
-            val = beckmann_eval(N, v, l, np.asarray(cl.alpha))
+            T = None if cl.tangent is None else np.asarray(cl.tangent, dtype=float)
+            val = beckmann_eval(N, v, l, np.asarray(cl.alpha), np.asarray(cl.anisotropy), T)
         # Bump shadowing: a closure normal on the other side of the light than n0 sees nothing.
         shadow = dot(n0, l) * dot(n0, N) * dot(N, l) < 0.0
         out += w * np.where(shadow, 0.0, val)[..., None]

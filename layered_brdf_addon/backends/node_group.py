@@ -163,8 +163,10 @@ def build_into(group, plan: EffectPlan) -> None:
         col, dd = ops.node("ShaderNodeCombineColor", {"Red": cl.weight[0], "Green": cl.weight[1],
                                                       "Blue": cl.weight[2]})
         rough = ops.sqrt(ops.clamp(cl.alpha, 0.0, 1.0))  # the Glossy node's Roughness is sqrt(alpha)
-        bsdf, dd = ops.node("ShaderNodeBsdfGlossy", {"Color": ops.out(col, dd, 0, "vector"), "Roughness": rough,
-                                                     "Normal": cl.normal}, distribution="BECKMANN")
+        inputs = {"Color": ops.out(col, dd, 0, "vector"), "Roughness": rough, "Normal": cl.normal}
+        if cl.tangent is not None:
+            inputs.update({"Anisotropy": cl.anisotropy, "Tangent": cl.tangent})
+        bsdf, dd = ops.node("ShaderNodeBsdfGlossy", inputs, distribution="BECKMANN")
         bsdf.label = cl.name
         shaders.append(ops.out(bsdf, dd, 0, "shader"))
     mix, dd = ops.node("ShaderNodeMixShader", {"Fac": extras["base_weight"]})

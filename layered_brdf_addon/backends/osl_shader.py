@@ -127,17 +127,18 @@ float thickness_noise(vector p, float w, float scale, float detail, float roughn
 
 GLOSSY = {
     "beckmann": """\
-/* The glossy closure of a lobe about `Nc`: Beckmann microfacets.  OSL's microfacet()
- * takes alpha itself, not the Glossy node's Roughness = sqrt(alpha). */
-closure color glossy_lobe(vector Nc, float e, float alpha, color weight)
+/* The glossy closure of a lobe about `Nc`: Beckmann microfacets, alpha_x along the
+ * tangent `U` and alpha_y across it (OSL's microfacet() takes the alphas themselves, not
+ * the Glossy node's Roughness and Anisotropy). */
+closure color glossy_lobe(vector Nc, vector U, float e, float alpha_x, float alpha_y, color weight)
 {
-  return weight * microfacet("beckmann", normal(Nc), vector(0.0), alpha, alpha, 0.0, 0);
+  return weight * microfacet("beckmann", normal(Nc), U, alpha_x, alpha_y, 0.0, 0);
 }
 """,
     "phong": """\
 /* The glossy closure of a lobe about `Nc`: a normalised Phong lobe of exponent e about the
  * mirror of the view (phong_ramp with eight equal colours). */
-closure color glossy_lobe(vector Nc, float e, float alpha, color weight)
+closure color glossy_lobe(vector Nc, vector U, float e, float alpha_x, float alpha_y, color weight)
 {
   color ramp[8] = {color(1.0), color(1.0), color(1.0), color(1.0),
                    color(1.0), color(1.0), color(1.0), color(1.0)};
@@ -214,8 +215,11 @@ def shader_source(plan: EffectPlan) -> str:
         ops.raw("/* Eqs. 14-18: a Lambertian closure about n0 tinted by kd base rho_d. */")
         ops.raw(f"BSDF += {_colour(ops, res.diffuse)} * diffuse({ops.use(x['upper_normal'])});")
     for cl in res.glossy:
-        ops.raw(f"BSDF += glossy_lobe({ops.use(cl.normal)}, {ops.use(cl.exponent)}, {ops.use(cl.alpha)}, "
-                f"{_colour(ops, cl.weight)});  /* {cl.name} */")
+        # The alphas the Glossy BSDF node derives from Roughness and Anisotropy (unused by Phong).
+        a_x, a_y = (program.glossy_alphas(ops, cl.alpha, cl.anisotropy) if plan.lobe == "beckmann"
+                    else (cl.alpha, cl.alpha))
+        ops.raw(f"BSDF += glossy_lobe({ops.use(cl.normal)}, {ops.use(cl.tangent)}, {ops.use(cl.exponent)}, "
+                f"{ops.use(a_x)}, {ops.use(a_y)}, {_colour(ops, cl.weight)});  /* {cl.name} */")
     ops.raw(f"Thickness = {ops.use(x['thickness'])};")
     ops.raw(f"LowerNormal = {ops.use(x['lower_normal'])};")
     ops.raw(f"UpperNormal = {ops.use(x['upper_normal'])};")

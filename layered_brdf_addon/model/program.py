@@ -27,7 +27,8 @@ from .plan import EffectPlan
 
 INV_2PI = 0.5 / math.pi
 DEG = math.pi / 180.0
-MIN_COS = 0.05  # lower bound of the view cosine used to widen Beckmann lobes
+MIN_COS = 0.05  # lower bound of the view cosine used to stretch Beckmann lobes
+ANISO_FLOOR = 0.5  # the stretch 1/mu of a lobe across the view's plane stops at mu = alpha / 2
 GRADIENT_STEP = 1.0e-3  # forward-difference step (world units) of the thickness gradient
 D_LIMIT = 1.0e6  # largest thickness (nm): the range of d_min and d_max
 
@@ -54,8 +55,10 @@ class Closure:
     name: str
     normal: Any
     exponent: Any
-    alpha: Any
+    alpha: Any  # geometric mean of the two alphas (the Glossy BSDF's Roughness^2)
     weight: tuple  # (r, g, b) scalars
+    anisotropy: Any = 0.0  # the Glossy BSDF's Anisotropy: the lobe's stretch along ``tangent``
+    tangent: Any = None
 
 
 @dataclass
@@ -109,40 +112,81 @@ def beckmann_lambda(ops, alpha2, mu):
 
 
 @shader_function
-def lobe_alpha(ops, e, mu):
-    """Beckmann alpha of a Phong exponent, ``sqrt(2 / (4 e + 2))``, widened by 1/sqrt(cos) to
-    keep the lobe's energy.  Exponent 0 gives alpha 1, a grazing view is bounded by MIN_COS."""
-    return ops.minimum(ops.sqrt(2.0 / ((4.0 * ops.maximum(e, 0.0) + 2.0) * ops.clamp(mu, MIN_COS, 1.0))), 1.0)
+def lobe_alphas(ops, e_within, e_across, mu):
+    """Beckmann alphas of a lobe about a closure normal seen at cosine ``mu``, from its Phong
+    exponents within the plane of the view and the closure normal (``e_within``) and
+    across it (``e_across``): ``(alpha, anisotropy)`` in the Glossy BSDF's convention
+    (``alpha`` = Roughness^2, the tangent across the plane, docs/closure-decomposition.md).
+
+    A half vector turned by ``delta`` within that plane turns the mirrored direction by
+    ``2 delta``, across it by ``2 mu delta``: a round Phong lobe ``cos^e`` is a Beckmann lobe
+    of alpha ``sqrt(2 / (4 e + 2))`` within the plane and ``1/mu`` times that across it (the
+    long, thin highlight of a grazing view).  The stretch is bounded by the lobe's own width
+    (``mu >= ANISO_FLOOR alpha_within``): beyond that the small-angle map overshoots.  Both
+    alphas are at most 1, and Cycles' anisotropy range (+-0.99) bounds their ratio.
+    """
+    a_in = ops.minimum(ops.sqrt(2.0 / (4.0 * ops.maximum(e_within, 0.0) + 2.0)), 1.0)
+    a_across = ops.sqrt(2.0 / (4.0 * ops.maximum(e_across, 0.0) + 2.0))
+    a_across = ops.minimum(a_across / ops.maximum(mu, ops.maximum(ANISO_FLOOR * a_in, MIN_COS)), 1.0)
+    alpha = ops.sqrt(a_in * a_across)
+    # Cycles: anisotropy a < 0 gives alpha_x = alpha / (1 + a) along the tangent, a > 0
+    # gives alpha_x = alpha (1 - a); both keep alpha_x alpha_y = alpha^2.
+    ratio = ops.sqrt(a_in / a_across)
+    aniso = ops.select(ops.gt(a_across, a_in), ratio - 1.0, 1.0 - 1.0 / ratio)
+    return alpha, ops.clamp(aniso, -0.99, 0.99)
 
 
 @shader_function
-def lobe_peak(ops, e, alpha, mu, *, lobe):
+def glossy_alphas(ops, alpha, aniso):
+    """Cycles' Beckmann alphas along the tangent and within the plane (``alpha_x``,
+    ``alpha_y``) from the Glossy BSDF's alpha and anisotropy."""
+    neg = ops.lt(aniso, 0.0)
+    a_x = ops.select(neg, alpha / (1.0 + aniso), alpha * (1.0 - aniso))
+    a_y = ops.select(neg, alpha * (1.0 + aniso), alpha / (1.0 - aniso))
+    return a_x, a_y
+
+
+@shader_function
+def lobe_peak(ops, e, alpha, aniso, mu, *, lobe):
     """The closure's value (light cosine included) at its own mirror direction; ``mu`` is
     floored at 1e-4 so that the peak and its inverse stay finite at a grazing view."""
     mu = ops.maximum(mu, 1e-4)
     if lobe == "phong":
         # phong_ramp: cosNO (e + 2)/(2 pi) cos^e, which is mu (e + 2)/(2 pi) at the mirror.
         return mu * (e + 2.0) * INV_2PI
-    # Beckmann: D / (4 cosNV (1 + Lambda_V + Lambda_L)) at the mirror, D(h = N) = 1/(pi alpha^2).
-    alpha2 = alpha * alpha
-    return 1.0 / (math.pi * alpha2 * 4.0 * mu * (1.0 + 2.0 * beckmann_lambda(ops, alpha2, mu)))
+    # Beckmann: D / (4 cosNV (1 + Lambda_V + Lambda_L)) at the mirror, D(h = N) =
+    # 1/(pi alpha_x alpha_y); the view and its mirror lie in the plane, where alpha is alpha_y.
+    a_x, a_y = glossy_alphas(ops, alpha, aniso)
+    return 1.0 / (math.pi * a_x * a_y * 4.0 * mu * (1.0 + 2.0 * beckmann_lambda(ops, a_y * a_y, mu)))
 
 
 @shader_function
-def lobe_weight(ops, amplitude, mu, e, *, lobe):
+def closure_tangent(ops, N, v, aniso):
+    """The tangent across the plane of the view and the closure normal; where that plane is
+    undefined (view along the normal) the lobe is made isotropic, which ignores the tangent."""
+    c = ops.cross(N, v)
+    ok = ops.gt(ops.length(c), 1e-4)
+    return ops.normalize(c, (1.0, 0.0, 0.0)), ops.select(ok, aniso, 0.0)
+
+
+@shader_function
+def lobe_weight(ops, amplitude, mu, e_within, e_across, *, lobe):
     """The closure whose value at its centre equals ``amplitude``, for a view at cosine
-    ``mu`` from its normal: its weight and its Beckmann alpha."""
-    alpha = lobe_alpha(ops, e, mu)
-    weight = amplitude / lobe_peak(ops, e, alpha, mu, lobe=lobe)
-    return weight, alpha
+    ``mu`` from its normal: its weight, alpha and anisotropy."""
+    alpha, aniso = lobe_alphas(ops, e_within, e_across, mu)
+    e = ops.sqrt(ops.maximum(e_within, 0.0) * ops.maximum(e_across, 0.0))
+    weight = amplitude / lobe_peak(ops, e, alpha, aniso, mu, lobe=lobe)
+    return weight, alpha, aniso
 
 
 def closure_for(ops, lobe, name, normal, e, v, amplitudes):
     """A closure about ``normal`` whose value at its centre equals ``amplitudes`` (r, g, b)."""
     mu = ops.named(f"mu_{name}", ops.dot(normal, v))
-    alpha = ops.named(f"alpha_{name}", lobe_alpha(ops, e, mu))
-    inv = ops.named(f"inv_peak_{name}", 1.0 / lobe_peak(ops, e, alpha, mu, lobe=lobe))
-    return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes))
+    alpha, aniso = lobe_alphas(ops, e, e, mu)
+    tangent, aniso = closure_tangent(ops, normal, v, aniso)
+    tangent = ops.named(f"tangent_{name}", tangent)
+    inv = ops.named(f"inv_peak_{name}", 1.0 / lobe_peak(ops, e, alpha, aniso, mu, lobe=lobe))
+    return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes), aniso, tangent)
 
 
 @shader_function
@@ -224,12 +268,19 @@ def spread(ops, x, like):
 
 
 @shader_function
-def light_path(ops, eta, s_o, entering, cos_v, n0, n1, v, r_v):
+def light_path(ops, eta, s_o, entering, cos_v, e1, n0, n1, v, r_v):
     """The light direction ``l*`` whose path through the layer leaves along ``v`` (eqs. 10,
-    11): refract ``-v`` into the layer (``t_o``), mirror it on the lower boundary, refract
-    it out.  ``through`` is 0 where total internal reflection or eq. 11 blocks the path
-    (``entering``: 0 where ``v`` itself cannot enter); ``l*`` is then the mirror direction
-    ``r_v``."""
+    11): refract ``-v`` into the layer (``t_o``), mirror it on the lower boundary (``r``),
+    refract it out.  ``through`` is 0 where eq. 11 blocks the path (``entering``: 0 where
+    ``v`` itself cannot enter); ``l*`` is then the mirror direction ``r_v``.
+
+    Where ``r`` cannot leave (beyond the critical angle, or heading down) the in-layer
+    lobe still sends its tail out through the critical cone: ``l*`` becomes the exit
+    direction in the plane of ``r`` and ``n0`` where the tail's light is largest, and
+    ``tail`` is the lobe's value there, ``cos^e1`` of its angle from ``r`` (1 where ``r``
+    leaves).  Near grazing exit the light goes as ``u^2 cos^e1(delta0 + b u^2)`` (``u`` the
+    exit cosine, ``delta0`` the angle of ``r`` beyond the critical angle, ``b = eta / (2 cos
+    theta_c)``): largest at ``u^2 = (sqrt(delta0^2 + 4 / e1) - delta0) / (2 b)``."""
     inv_eta = 1.0 / eta
     t_o = v * (-eta) + n0 * (eta * cos_v - s_o)
     to_n1 = ops.dot(t_o, n1)
@@ -237,9 +288,22 @@ def light_path(ops, eta, s_o, entering, cos_v, n0, n1, v, r_v):
     cos_r = ops.dot(r, n0)
     k_l = 1.0 - inv_eta * inv_eta * (1.0 - cos_r * cos_r)
     l_raw = r * inv_eta - n0 * (inv_eta * cos_r - ops.sqrt(k_l))
-    through = entering * ops.gt(k_l, 0.0) * ops.lt(to_n1, 0.0) * ops.gt(cos_r, 0.0)
-    l_star = ops.normalize(ops.select_vec(through, l_raw, r_v), r_v)
-    return l_star, through
+    leaves = ops.gt(k_l, 0.0) * ops.gt(cos_r, 0.0)
+    through = entering * ops.lt(to_n1, 0.0)
+    # The tail through the critical cone (sin theta_c = eta).
+    sin_r = ops.sqrt(ops.maximum(1.0 - cos_r * cos_r, 0.0))
+    cos_c = ops.sqrt(ops.maximum(1.0 - eta * eta, 1e-6))
+    delta0 = ops.maximum(sin_r * cos_c - cos_r * eta, 0.0)  # sin(theta_r - theta_c)
+    b = eta / (2.0 * cos_c)
+    u2 = ops.clamp((ops.sqrt(delta0 * delta0 + 4.0 / ops.maximum(e1, 1e-3)) - delta0) / (2.0 * b), 4e-4, 1.0)
+    sin_x = ops.sqrt(1.0 - u2)
+    p = ops.normalize(r - n0 * cos_r, v)
+    l_tail = n0 * ops.sqrt(u2) + p * sin_x
+    sin_in = eta * sin_x
+    cos_delta = cos_r * ops.sqrt(ops.maximum(1.0 - sin_in * sin_in, 0.0)) + sin_r * sin_in
+    tail = ops.select(leaves, 1.0, ops.exp(-ops.maximum(e1, 0.0) * (1.0 - cos_delta)))
+    l_star = ops.normalize(ops.select_vec(through, ops.select_vec(leaves, l_raw, l_tail), r_v), r_v)
+    return l_star, through, tail
 
 
 @shader_function
@@ -255,19 +319,24 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     k_o = 1.0 - eta * eta * (1.0 - cos_v * cos_v)
     s_o = ops.sqrt(k_o)  # <t_o, -n0>
     entering = ops.gt(k_o, 0.0) * ops.gt(cos_v, 0.0)
-    paths = [light_path(ops, e, s, ok, cos_v, n0, n1, v, r_v)
+    paths = [light_path(ops, e, s, ok, cos_v, e1, n0, n1, v, r_v)
              for e, s, ok in zip(channels(ops, eta), channels(ops, s_o), channels(ops, entering))]
     l_stars = [p[0] for p in paths]
     cos_ls = spread(ops, gather(ops, [ops.clamp(ops.dot(ls, n0), 0.0, 1.0) for ls in l_stars]), r1)
-    # Eq. 11 and total internal reflection on either crossing: no path, T = 0.
+    # Eq. 11: no path, T = 0.  A path whose centre cannot leave keeps its tail.
     through = spread(ops, gather(ops, [p[1] for p in paths]), r1) * ops.gt(cos_ls, 0.0)
+    tail = spread(ops, gather(ops, [p[2] for p in paths]), r1)
     # The in-layer lobe seen from outside: exponent e1 / r1^2, times cos(l*)/cos(t) for the
     # stretch within the plane of incidence (geometric mean of the two directions).
     s_ls = ops.sqrt(ops.maximum(1.0 - eta * eta * (1.0 - cos_ls * cos_ls), 1e-12))
     e1p = e1 / (r1 * r1) * ops.select(through, cos_ls / s_ls, 1.0)
+    # The same stretch per axis: across the plane of incidence e1 / r1^2, within it
+    # e1 / r1^2 (cos(l*)/cos(t))^2 (the closures are anisotropic).
+    e1_across = e1 / (r1 * r1)
+    e1_within = e1p * ops.select(through, cos_ls / s_ls, 1.0)
     Tc = transmission_factor(ops, s_o, f)
     F_l = schlick(ops, cos_ls, f)
-    AT_amp = ks * (1.0 - F_l) * Tc * (e1 + 2.0) * INV_2PI / (r1 * r1)
+    AT_amp = ks * (1.0 - F_l) * Tc * (e1 + 2.0) * INV_2PI / (r1 * r1) * tail
     AT = ops.select(through, AT_amp * cos_ls, 0.0)
     # Interference, eq. 5: sqrt(R T) of two Phong lobes is a lobe of exponent
     # (e0 + e1')/2 about their weighted centre; phase from eq. 3 at that centre.
@@ -284,7 +353,9 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
         AI = 0.0  # averaged over the band: cos(2 Phi) has mean 0
     d_RI = spread(ops, gather(ops, [angle2(ops, r_v, c) for c in c_Is]), r1)
     d_TI = spread(ops, gather(ops, [angle2(ops, ls, c) for ls, c in zip(l_stars, c_Is)]), r1)
-    out = dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), d_RT=d_RT, d_RI=d_RI, d_TI=d_TI)
+    out = dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), d_RT=d_RT, d_RI=d_RI, d_TI=d_TI,
+               eT_within=e1_within, eT_across=e1_across, eI_within=0.5 * (e0 + e1_within),
+               eI_across=0.5 * (e0 + e1_across))
     for k, (ls, c) in enumerate(zip(l_stars, c_Is)):
         out[f"l_star{k}"] = ls
         out[f"c_I{k}"] = c
@@ -318,33 +389,36 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", i
                                    t["d_TI"])
     n = 3 if ops.is_vector(r1) else 1
     out = dict(AR=AR)
-    for tag, amp, centre, e in (("T", AT, "l_star", t["eT"]), ("I", AI, "c_I", t["eI"])):
+    for tag, amp, centre in (("T", AT, "l_star"), ("I", AI, "c_I")):
         normals = [ops.normalize(v + t[f"{centre}{k}"], n0) for k in range(n)]
         mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
-        w, alpha = lobe_weight(ops, amp, mu, e, lobe=lobe)
+        w, alpha, aniso = lobe_weight(ops, amp, mu, t[f"e{tag}_within"], t[f"e{tag}_across"], lobe=lobe)
+        frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
         out.update({f"N_{tag}{k}": N for k, N in enumerate(normals)})
-        out.update({f"e_{tag}": e, f"alpha_{tag}": alpha, f"w_{tag}": w})
+        out.update({f"U_{tag}{k}": f[0] for k, f in enumerate(frames)})
+        out.update({f"e_{tag}": t[f"e{tag}"], f"alpha_{tag}": alpha, f"w_{tag}": w,
+                    f"aniso_{tag}": gather(ops, [f[1] for f in frames])})
     return out
 
 
 def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc_I2,
                   lead_T0, lead_T1, lead_T2, lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI,
-                  r1, lam, m, in0, in1, in2, is0, is1, is2, e0, e1, ks, kd, r0, n0, n1, v, d,
+                  lead_nT, lead_nI, r1, lam, m, in0, in1, in2, is0, is1, is2, e0, e1, ks, kd, r0, n0, n1, v, d,
                   lobe="beckmann", diffuse=True, interference=True):
     """One wavelength of the spectral mode, chained: it takes the running sums and returns
     them updated, so a shader holds only the sums, whatever the number of wavelengths.
 
     ``m``: the wavelength's row of the spectrum-to-Rec.709 matrix (a vector); ``in_g``: 1
     if the wavelength belongs to lobe group ``g``; ``is_g``: 1 if it leads group ``g``
-    (its centre and exponent are the group's).  The lead exponents and alphas of the three
-    groups travel packed in vectors.
+    (its centre and exponent are the group's).  The lead exponents, alphas and anisotropies
+    of the three groups travel packed in vectors.
     """
     out = {}
     # Everything this step computes waits for the whole previous state, so that a node
     # backend evaluates the steps one after the other and only the running state stays
     # alive, whatever the number of wavelengths (Cycles' SVM has a stack of 255 floats).
     state = (acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc_I2, lead_T0, lead_T1, lead_T2,
-             lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI)
+             lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI, lead_nT, lead_nI)
     d = ops.after(state, d)
     r1 = ops.after(state, r1)  # everything that depends on the index waits too
     if diffuse and not interference:
@@ -355,19 +429,20 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
         out["acc_D"] = acc_D
     b = channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe, interference)
     out["acc_R"] = acc_R + m * b["AR"]
-    for tag, accs, leads, e_lead, a_lead in (("T", (acc_T0, acc_T1, acc_T2), (lead_T0, lead_T1, lead_T2),
-                                             lead_eT, lead_aT),
-                                            ("I", (acc_I0, acc_I1, acc_I2), (lead_I0, lead_I1, lead_I2),
-                                             lead_eI, lead_aI)):
+    for tag, accs, leads, e_lead, a_lead, n_lead in (
+            ("T", (acc_T0, acc_T1, acc_T2), (lead_T0, lead_T1, lead_T2), lead_eT, lead_aT, lead_nT),
+            ("I", (acc_I0, acc_I1, acc_I2), (lead_I0, lead_I1, lead_I2), lead_eI, lead_aI, lead_nI)):
         w = b[f"w_{tag}"]
-        e_parts, a_parts = [], []
+        e_parts, a_parts, n_parts = [], [], []
         for g, (acc, lead, member, is_lead) in enumerate(zip(accs, leads, (in0, in1, in2), (is0, is1, is2))):
             out[f"acc_{tag}{g}"] = acc + m * (w * member)
             out[f"lead_{tag}{g}"] = ops.select_vec(is_lead, b[f"N_{tag}0"], lead)
             e_parts.append(ops.select(is_lead, b[f"e_{tag}"], ops.dot(e_lead, _UNIT[g])))
             a_parts.append(ops.select(is_lead, b[f"alpha_{tag}"], ops.dot(a_lead, _UNIT[g])))
+            n_parts.append(ops.select(is_lead, b[f"aniso_{tag}"], ops.dot(n_lead, _UNIT[g])))
         out[f"lead_e{tag}"] = ops.combine(*e_parts)
         out[f"lead_a{tag}"] = ops.combine(*a_parts)
+        out[f"lead_n{tag}"] = ops.combine(*n_parts)
     return out
 
 
@@ -401,7 +476,8 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     zero = (0.0, 0.0, 0.0)
     state = dict(acc_R=zero, acc_D=zero, acc_T0=zero, acc_T1=zero, acc_T2=zero, acc_I0=zero, acc_I1=zero,
                  acc_I2=zero, lead_T0=n0, lead_T1=n0, lead_T2=n0, lead_I0=n0, lead_I1=n0, lead_I2=n0,
-                 lead_eT=(1.0, 1.0, 1.0), lead_eI=(1.0, 1.0, 1.0), lead_aT=(1.0, 1.0, 1.0), lead_aI=(1.0, 1.0, 1.0))
+                 lead_eT=(1.0, 1.0, 1.0), lead_eI=(1.0, 1.0, 1.0), lead_aT=(1.0, 1.0, 1.0), lead_aI=(1.0, 1.0, 1.0),
+                 lead_nT=zero, lead_nI=zero)
     for j, (k, lam, m) in enumerate(zip(K, lams, M)):
         r1 = ops.clamp(k[0] * P["r1"][0] + k[1] * P["r1"][1] + k[2] * P["r1"][2], 0.1, 5.0)
         member = [1.0 if groups[j] == g else 0.0 for g in range(3)]
@@ -424,8 +500,11 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(state["acc_R"])))
     for tag, label in (("T", "transmit"), ("I", "interfere")):
         for g in sorted(leads):
-            res.glossy.append(Closure(f"{label}_{g}", state[f"lead_{tag}{g}"], ops.dot(state[f"lead_e{tag}"], _UNIT[g]),
-                                      ops.dot(state[f"lead_a{tag}"], _UNIT[g]), rgb(state[f"acc_{tag}{g}"])))
+            N = state[f"lead_{tag}{g}"]
+            tangent, aniso = closure_tangent(ops, N, v, ops.dot(state[f"lead_n{tag}"], _UNIT[g]))
+            res.glossy.append(Closure(f"{label}_{g}", N, ops.dot(state[f"lead_e{tag}"], _UNIT[g]),
+                                      ops.dot(state[f"lead_a{tag}"], _UNIT[g]), rgb(state[f"acc_{tag}{g}"]),
+                                      aniso, tangent))
     return res
 
 
@@ -452,10 +531,11 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
                      lobe=plan.lobe)
         res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
         for tag, label in (("T", "transmit"), ("I", "interfere")):
-            e, alpha, w = (ops.components(b[f"{k}_{tag}"]) for k in ("e", "alpha", "w"))
+            e, alpha, w, aniso = (ops.components(b[f"{k}_{tag}"]) for k in ("e", "alpha", "w", "aniso"))
             for c in range(3):
                 weight = tuple(w[c] if k == c else 0.0 for k in range(3))
-                res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}{c}"], e[c], alpha[c], weight))
+                res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}{c}"], e[c], alpha[c], weight,
+                                          aniso[c], b[f"U_{tag}{c}"]))
         return res
     # Equal indices: every channel's lobe has the same centre and exponent (green's are
     # used); each channel keeps the weight computed from its own wavelength.  One scalar
@@ -466,7 +546,7 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     g = blocks[1]
     for tag, label in (("T", "transmit"), ("I", "interfere")):
         res.glossy.append(Closure(label, g[f"N_{tag}0"], g[f"e_{tag}"], g[f"alpha_{tag}"],
-                                  tuple(b[f"w_{tag}"] for b in blocks)))
+                                  tuple(b[f"w_{tag}"] for b in blocks), g[f"aniso_{tag}"], g[f"U_{tag}0"]))
     return res
 
 
