@@ -460,6 +460,32 @@ def spectral_groups(lams, dispersion: bool):
     return groups, leads
 
 
+def merged_group_weights(ops, accs):
+    """Closure weights (r, g, b) of the lobe groups from their Rec.709 sums ``accs``.
+
+    A group's sum can be negative in a channel (the colour matching functions are: the
+    green group's wavelengths subtract red), and Cycles clamps a closure weight at 0.
+    Clamping each group alone would discard that negative part and add its light back;
+    instead, per channel, the negative parts are taken from the groups' positive parts in
+    proportion, so the groups' total keeps the channel's sum (clamped at 0 only if the sum
+    itself is negative)."""
+    out = [[None] * 3 for _ in accs]
+    for c in range(3):
+        parts = [ops.dot(acc, _UNIT[c]) for acc in accs]
+        if len(parts) == 1:
+            out[0][c] = ops.maximum(parts[0], 0.0)
+            continue
+        pos = [ops.maximum(x, 0.0) for x in parts]
+        total, pos_total = parts[0], pos[0]
+        for x, q in zip(parts[1:], pos[1:]):
+            total = total + x
+            pos_total = pos_total + q
+        scale = ops.maximum(total, 0.0) / ops.maximum(pos_total, 1e-30)
+        for g, q in enumerate(pos):
+            out[g][c] = q * scale
+    return [tuple(w) for w in out]
+
+
 def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     """Spectral mode: the channel program at N wavelengths (``r1(lambda)`` from the Cauchy
     fit through the three indices, a linear map), summed into RGB closures with baked
@@ -499,12 +525,12 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
         return res
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(state["acc_R"])))
     for tag, label in (("T", "transmit"), ("I", "interfere")):
-        for g in sorted(leads):
+        weights = merged_group_weights(ops, [state[f"acc_{tag}{g}"] for g in sorted(leads)])
+        for g, w in zip(sorted(leads), weights):
             N = state[f"lead_{tag}{g}"]
             tangent, aniso = closure_tangent(ops, N, v, ops.dot(state[f"lead_n{tag}"], _UNIT[g]))
             res.glossy.append(Closure(f"{label}_{g}", N, ops.dot(state[f"lead_e{tag}"], _UNIT[g]),
-                                      ops.dot(state[f"lead_a{tag}"], _UNIT[g]), rgb(state[f"acc_{tag}{g}"]),
-                                      aniso, tangent))
+                                      ops.dot(state[f"lead_a{tag}"], _UNIT[g]), w, aniso, tangent))
     return res
 
 
