@@ -162,11 +162,11 @@ def lobe_peak(ops, e, alpha, aniso, mu, *, lobe):
 
 @shader_function
 def closure_tangent(ops, N, v, aniso):
-    """The tangent across the plane of the view and the closure normal; where that plane is
-    undefined (view along the normal) the lobe is made isotropic, which ignores the tangent."""
+    """The tangent across the plane of the view and the closure normal, ``cross(N, v)``
+    (Cycles normalises it with the normal's frame); where that plane is undefined (view
+    along the normal) the lobe is made isotropic, which ignores the tangent."""
     c = ops.cross(N, v)
-    ok = ops.gt(ops.length(c), 1e-4)
-    return ops.normalize(c, (1.0, 0.0, 0.0)), ops.select(ok, aniso, 0.0)
+    return c, ops.select(ops.gt(ops.dot(c, c), 1e-8), aniso, 0.0)
 
 
 @shader_function
