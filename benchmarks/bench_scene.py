@@ -392,6 +392,8 @@ def parse_args(argv=None):
     ap.add_argument("--samples", type=int, nargs=2, metavar=("LO", "HI"),
                     help=f"the two sample counts (default {DEFAULTS['samples']})")
     ap.add_argument("--no-eevee", action="store_true", help="skip the EEVEE part")
+    ap.add_argument("--spectral-modes", nargs="*", choices=ACCURACY_MODES,
+                    help=f"accuracy modes measured for {SPECTRAL_PRESET} (default: all)")
     ap.add_argument("--out", type=Path, default=OUT_JSON, help="the JSON to write")
     args = ap.parse_args(argv)
     base = {**DEFAULTS, "presets": tuple(PRESETS), "spectral_modes": ACCURACY_MODES,
@@ -402,8 +404,9 @@ def parse_args(argv=None):
     args.samples = tuple(args.samples or base["samples"])
     if args.samples[1] <= args.samples[0]:
         ap.error("--samples LO HI needs HI > LO")
-    for key in ("spectral_modes", "eevee_presets", "eevee_samples", "eevee_frames"):
+    for key in ("eevee_presets", "eevee_samples", "eevee_frames"):
         setattr(args, key, base[key])
+    args.spectral_modes = tuple(args.spectral_modes if args.spectral_modes is not None else base["spectral_modes"])
     return args
 
 

@@ -215,9 +215,13 @@ def shader_source(plan: EffectPlan) -> str:
         ops.raw("/* Eqs. 14-18: a Lambertian closure about n0 tinted by kd base rho_d. */")
         ops.raw(f"BSDF += {_colour(ops, res.diffuse)} * diffuse({ops.use(x['upper_normal'])});")
     for cl in res.glossy:
-        # The alphas the Glossy BSDF node derives from Roughness and Anisotropy (unused by Phong).
-        a_x, a_y = (program.glossy_alphas(ops, cl.alpha, cl.anisotropy) if plan.lobe == "beckmann"
-                    else (cl.alpha, cl.alpha))
+        # The alphas along the tangent and across it (Phong ignores them).
+        if plan.lobe != "beckmann":
+            a_x = a_y = cl.alpha
+        elif cl.alpha_x is not None:
+            a_x, a_y = cl.alpha_x, cl.alpha_y
+        else:
+            a_x, a_y = program.glossy_alphas(ops, cl.alpha, cl.anisotropy)
         ops.raw(f"BSDF += glossy_lobe({ops.use(cl.normal)}, {ops.use(cl.tangent)}, {ops.use(cl.exponent)}, "
                 f"{ops.use(a_x)}, {ops.use(a_y)}, {_colour(ops, cl.weight)});  /* {cl.name} */")
     ops.raw(f"Thickness = {ops.use(x['thickness'])};")

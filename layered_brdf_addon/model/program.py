@@ -59,6 +59,8 @@ class Closure:
     weight: tuple  # (r, g, b) scalars
     anisotropy: Any = 0.0  # the Glossy BSDF's Anisotropy: the lobe's stretch along ``tangent``
     tangent: Any = None
+    alpha_x: Any = None  # the alphas along the tangent and across it (OSL's microfacet())
+    alpha_y: Any = None
 
 
 @dataclass
@@ -116,7 +118,9 @@ def lobe_alphas(ops, e_within, e_across, mu):
     """Beckmann alphas of a lobe about a closure normal seen at cosine ``mu``, from its Phong
     exponents within the plane of the view and the closure normal (``e_within``) and
     across it (``e_across``): ``(alpha, anisotropy)`` in the Glossy BSDF's convention
-    (``alpha`` = Roughness^2, the tangent across the plane, docs/closure-decomposition.md).
+    (``alpha`` = Roughness^2, the tangent across the plane, docs/closure-decomposition.md),
+    and the two alphas themselves, ``alpha_x`` across the plane and ``alpha_y`` within it
+    (what Cycles derives from the first two: ratios up to 141 stay far inside its +-0.99).
 
     A half vector turned by ``delta`` within that plane turns the mirrored direction by
     ``2 delta``, across it by ``2 mu delta``: a round Phong lobe ``cos^e`` is a Beckmann lobe
@@ -133,13 +137,13 @@ def lobe_alphas(ops, e_within, e_across, mu):
     # gives alpha_x = alpha (1 - a); both keep alpha_x alpha_y = alpha^2.
     ratio = ops.sqrt(a_in / a_across)
     aniso = ops.select(ops.gt(a_across, a_in), ratio - 1.0, 1.0 - 1.0 / ratio)
-    return alpha, ops.clamp(aniso, -0.99, 0.99)
+    return alpha, ops.clamp(aniso, -0.99, 0.99), a_across, a_in
 
 
 @shader_function
 def glossy_alphas(ops, alpha, aniso):
-    """Cycles' Beckmann alphas along the tangent and within the plane (``alpha_x``,
-    ``alpha_y``) from the Glossy BSDF's alpha and anisotropy."""
+    """Cycles' Beckmann alphas along the tangent and across it (``alpha_x``, ``alpha_y``) from
+    the Glossy BSDF's alpha and anisotropy (where a closure carries only those)."""
     neg = ops.lt(aniso, 0.0)
     a_x = ops.select(neg, alpha / (1.0 + aniso), alpha * (1.0 - aniso))
     a_y = ops.select(neg, alpha * (1.0 + aniso), alpha / (1.0 - aniso))
@@ -147,7 +151,7 @@ def glossy_alphas(ops, alpha, aniso):
 
 
 @shader_function
-def lobe_peak(ops, e, alpha, aniso, mu, *, lobe):
+def lobe_peak(ops, e, a_x, a_y, mu, *, lobe):
     """The closure's value (light cosine included) at its own mirror direction; ``mu`` is
     floored at 1e-4 so that the peak and its inverse stay finite at a grazing view."""
     mu = ops.maximum(mu, 1e-4)
@@ -156,7 +160,6 @@ def lobe_peak(ops, e, alpha, aniso, mu, *, lobe):
         return mu * (e + 2.0) * INV_2PI
     # Beckmann: D / (4 cosNV (1 + Lambda_V + Lambda_L)) at the mirror, D(h = N) =
     # 1/(pi alpha_x alpha_y); the view and its mirror lie in the plane, where alpha is alpha_y.
-    a_x, a_y = glossy_alphas(ops, alpha, aniso)
     return 1.0 / (math.pi * a_x * a_y * 4.0 * mu * (1.0 + 2.0 * beckmann_lambda(ops, a_y * a_y, mu)))
 
 
@@ -172,21 +175,21 @@ def closure_tangent(ops, N, v, aniso):
 @shader_function
 def lobe_weight(ops, amplitude, mu, e_within, e_across, *, lobe):
     """The closure whose value at its centre equals ``amplitude``, for a view at cosine
-    ``mu`` from its normal: its weight, alpha and anisotropy."""
-    alpha, aniso = lobe_alphas(ops, e_within, e_across, mu)
+    ``mu`` from its normal: its weight, alpha and anisotropy, and the two alphas."""
+    alpha, aniso, a_x, a_y = lobe_alphas(ops, e_within, e_across, mu)
     e = ops.sqrt(ops.maximum(e_within, 0.0) * ops.maximum(e_across, 0.0))
-    weight = amplitude / lobe_peak(ops, e, alpha, aniso, mu, lobe=lobe)
-    return weight, alpha, aniso
+    weight = amplitude / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe)
+    return weight, alpha, aniso, a_x, a_y
 
 
 def closure_for(ops, lobe, name, normal, e, v, amplitudes):
     """A closure about ``normal`` whose value at its centre equals ``amplitudes`` (r, g, b)."""
     mu = ops.named(f"mu_{name}", ops.dot(normal, v))
-    alpha, aniso = lobe_alphas(ops, e, e, mu)
+    alpha, aniso, a_x, a_y = lobe_alphas(ops, e, e, mu)
     tangent, aniso = closure_tangent(ops, normal, v, aniso)
     tangent = ops.named(f"tangent_{name}", tangent)
-    inv = ops.named(f"inv_peak_{name}", 1.0 / lobe_peak(ops, e, alpha, aniso, mu, lobe=lobe))
-    return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes), aniso, tangent)
+    inv = ops.named(f"inv_peak_{name}", 1.0 / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe))
+    return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes), aniso, tangent, a_x, a_y)
 
 
 @shader_function
@@ -268,42 +271,51 @@ def spread(ops, x, like):
 
 
 @shader_function
-def light_path(ops, eta, s_o, entering, cos_v, e1, n0, n1, v, r_v):
-    """The light direction ``l*`` whose path through the layer leaves along ``v`` (eqs. 10,
-    11): refract ``-v`` into the layer (``t_o``), mirror it on the lower boundary (``r``),
-    refract it out.  ``through`` is 0 where eq. 11 blocks the path (``entering``: 0 where
-    ``v`` itself cannot enter); ``l*`` is then the mirror direction ``r_v``.
-
-    Where ``r`` cannot leave (beyond the critical angle, or heading down) the in-layer
-    lobe still sends its tail out through the critical cone: ``l*`` becomes the exit
-    direction in the plane of ``r`` and ``n0`` where the tail's light is largest, and
-    ``tail`` is the lobe's value there, ``cos^e1`` of its angle from ``r`` (1 where ``r``
-    leaves).  Near grazing exit the light goes as ``u^2 cos^e1(delta0 + b u^2)`` (``u`` the
-    exit cosine, ``delta0`` the angle of ``r`` beyond the critical angle, ``b = eta / (2 cos
-    theta_c)``): largest at ``u^2 = (sqrt(delta0^2 + 4 / e1) - delta0) / (2 b)``."""
-    inv_eta = 1.0 / eta
+def layer_path(ops, eta, s_o, cos_v, n0, n1, v):
+    """The view's path into the layer (eqs. 10, 11): ``-v`` refracted into the layer
+    (``t_o``) and mirrored on the lower boundary: ``r``, with ``<r, n0>`` and ``<t_o, n1>``
+    (eq. 11 needs ``<t_o, n1> < 0``: the path reaches the lower boundary)."""
     t_o = v * (-eta) + n0 * (eta * cos_v - s_o)
     to_n1 = ops.dot(t_o, n1)
     r = t_o - n1 * (2.0 * to_n1)
-    cos_r = ops.dot(r, n0)
+    return r, ops.dot(r, n0), to_n1
+
+
+@shader_function
+def exit_direction(ops, eta, cos_r, e1):
+    """Where the in-layer direction ``r`` (cosine ``cos_r`` to ``n0``) leaves the layer: the
+    light direction ``l* = a r + b n0`` (a unit vector), its cosine ``cos_l`` to ``n0``, the
+    in-layer cosine ``cos_t`` of the path that leaves along it, and ``tail``.
+
+    Where ``r`` leaves (inside the critical cone, ``sin theta_c = eta``), ``l*`` is ``r``
+    refracted out and ``tail`` is 1.  Where it cannot (beyond the critical angle, or
+    heading down) the in-layer lobe ``cos^e1`` about ``r`` still sends its tail out through
+    the critical cone: ``l*`` is the exit direction, in the plane of ``r`` and ``n0``, where
+    the tail's light is largest, and ``tail`` the lobe's value there (``exp(-e1 (1 - cos
+    delta))``, ``delta`` the in-layer angle from ``r``).  Near grazing exit that light goes
+    as ``u^2 cos^e1(delta0 + b u^2)`` (``u`` the exit cosine, ``delta0`` the angle of ``r``
+    beyond the critical angle, ``b = eta / (2 cos theta_c)``; Snell's law and Schlick's
+    ``1 - F ~ 5 u``): largest at ``u^2 = (sqrt(delta0^2 + 4 / e1) - delta0) / (2 b)``.
+    Scalars or channel triples."""
+    inv_eta = 1.0 / eta
     k_l = 1.0 - inv_eta * inv_eta * (1.0 - cos_r * cos_r)
-    l_raw = r * inv_eta - n0 * (inv_eta * cos_r - ops.sqrt(k_l))
     leaves = ops.gt(k_l, 0.0) * ops.gt(cos_r, 0.0)
-    through = entering * ops.lt(to_n1, 0.0)
-    # The tail through the critical cone (sin theta_c = eta).
     sin_r = ops.sqrt(ops.maximum(1.0 - cos_r * cos_r, 0.0))
     cos_c = ops.sqrt(ops.maximum(1.0 - eta * eta, 1e-6))
     delta0 = ops.maximum(sin_r * cos_c - cos_r * eta, 0.0)  # sin(theta_r - theta_c)
-    b = eta / (2.0 * cos_c)
-    u2 = ops.clamp((ops.sqrt(delta0 * delta0 + 4.0 / ops.maximum(e1, 1e-3)) - delta0) / (2.0 * b), 4e-4, 1.0)
+    u2 = ops.clamp((ops.sqrt(delta0 * delta0 + 4.0 / ops.maximum(e1, 1e-3)) - delta0) * (cos_c / eta), 4e-4, 1.0)
+    u = ops.sqrt(u2)
     sin_x = ops.sqrt(1.0 - u2)
-    p = ops.normalize(r - n0 * cos_r, v)
-    l_tail = n0 * ops.sqrt(u2) + p * sin_x
     sin_in = eta * sin_x
-    cos_delta = cos_r * ops.sqrt(ops.maximum(1.0 - sin_in * sin_in, 0.0)) + sin_r * sin_in
+    cos_in = ops.sqrt(ops.maximum(1.0 - sin_in * sin_in, 0.0))
+    cos_delta = cos_r * cos_in + sin_r * sin_in
     tail = ops.select(leaves, 1.0, ops.exp(-ops.maximum(e1, 0.0) * (1.0 - cos_delta)))
-    l_star = ops.normalize(ops.select_vec(through, ops.select_vec(leaves, l_raw, l_tail), r_v), r_v)
-    return l_star, through, tail
+    s_l = ops.sqrt(ops.maximum(k_l, 0.0))
+    # The tail's exit direction u n0 + sin_x p, with p = (r - cos_r n0) / sin_r.
+    q = sin_x / ops.maximum(sin_r, 1e-6)
+    a = ops.select(leaves, inv_eta, q)
+    b = ops.select(leaves, s_l - inv_eta * cos_r, u - cos_r * q)
+    return a, b, ops.select(leaves, s_l, u), ops.select(leaves, cos_r, cos_in), tail
 
 
 @shader_function
@@ -319,16 +331,21 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     k_o = 1.0 - eta * eta * (1.0 - cos_v * cos_v)
     s_o = ops.sqrt(k_o)  # <t_o, -n0>
     entering = ops.gt(k_o, 0.0) * ops.gt(cos_v, 0.0)
-    paths = [light_path(ops, e, s, ok, cos_v, e1, n0, n1, v, r_v)
-             for e, s, ok in zip(channels(ops, eta), channels(ops, s_o), channels(ops, entering))]
-    l_stars = [p[0] for p in paths]
-    cos_ls = spread(ops, gather(ops, [ops.clamp(ops.dot(ls, n0), 0.0, 1.0) for ls in l_stars]), r1)
-    # Eq. 11: no path, T = 0.  A path whose centre cannot leave keeps its tail.
-    through = spread(ops, gather(ops, [p[1] for p in paths]), r1) * ops.gt(cos_ls, 0.0)
-    tail = spread(ops, gather(ops, [p[2] for p in paths]), r1)
+    # The light direction l* whose path through the layer leaves along v (eqs. 10, 11):
+    # each channel's path, then how it leaves, computed on the channels at once.
+    paths = [layer_path(ops, e, s, cos_v, n0, n1, v) for e, s in zip(channels(ops, eta), channels(ops, s_o))]
+    cos_r = gather(ops, [p[1] for p in paths])
+    to_n1 = gather(ops, [p[2] for p in paths])
+    a, b, cos_ls, s_ls, tail = exit_direction(ops, eta, cos_r, e1)
+    cos_ls = ops.clamp(cos_ls, 0.0, 1.0)
+    # Eq. 11: no path, T = 0, and l* is the mirror direction.  A path whose centre cannot
+    # leave keeps its tail.
+    through = entering * ops.lt(to_n1, 0.0) * ops.gt(cos_ls, 0.0)
+    l_stars = [ops.select_vec(ok, p[0] * ak + n0 * bk, r_v)
+               for p, ok, ak, bk in zip(paths, channels(ops, through), channels(ops, a), channels(ops, b))]
     # The in-layer lobe seen from outside: exponent e1 / r1^2, times cos(l*)/cos(t) for the
     # stretch within the plane of incidence (geometric mean of the two directions).
-    s_ls = ops.sqrt(ops.maximum(1.0 - eta * eta * (1.0 - cos_ls * cos_ls), 1e-12))
+    s_ls = ops.maximum(s_ls, 1e-6)
     e1p = e1 / (r1 * r1) * ops.select(through, cos_ls / s_ls, 1.0)
     # The same stretch per axis: across the plane of incidence e1 / r1^2, within it
     # e1 / r1^2 (cos(l*)/cos(t))^2 (the closures are anisotropic).
@@ -392,12 +409,12 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", i
     for tag, amp, centre in (("T", AT, "l_star"), ("I", AI, "c_I")):
         normals = [ops.normalize(v + t[f"{centre}{k}"], n0) for k in range(n)]
         mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
-        w, alpha, aniso = lobe_weight(ops, amp, mu, t[f"e{tag}_within"], t[f"e{tag}_across"], lobe=lobe)
+        w, alpha, aniso, a_x, a_y = lobe_weight(ops, amp, mu, t[f"e{tag}_within"], t[f"e{tag}_across"], lobe=lobe)
         frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
         out.update({f"N_{tag}{k}": N for k, N in enumerate(normals)})
         out.update({f"U_{tag}{k}": f[0] for k, f in enumerate(frames)})
         out.update({f"e_{tag}": t[f"e{tag}"], f"alpha_{tag}": alpha, f"w_{tag}": w,
-                    f"aniso_{tag}": gather(ops, [f[1] for f in frames])})
+                    f"aniso_{tag}": gather(ops, [f[1] for f in frames]), f"ax_{tag}": a_x, f"ay_{tag}": a_y})
     return out
 
 
@@ -557,11 +574,12 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
                      lobe=plan.lobe)
         res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
         for tag, label in (("T", "transmit"), ("I", "interfere")):
-            e, alpha, w, aniso = (ops.components(b[f"{k}_{tag}"]) for k in ("e", "alpha", "w", "aniso"))
+            e, alpha, w, aniso, a_x, a_y = (ops.components(b[f"{k}_{tag}"])
+                                            for k in ("e", "alpha", "w", "aniso", "ax", "ay"))
             for c in range(3):
                 weight = tuple(w[c] if k == c else 0.0 for k in range(3))
                 res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}{c}"], e[c], alpha[c], weight,
-                                          aniso[c], b[f"U_{tag}{c}"]))
+                                          aniso[c], b[f"U_{tag}{c}"], a_x[c], a_y[c]))
         return res
     # Equal indices: every channel's lobe has the same centre and exponent (green's are
     # used); each channel keeps the weight computed from its own wavelength.  One scalar
@@ -572,7 +590,8 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     g = blocks[1]
     for tag, label in (("T", "transmit"), ("I", "interfere")):
         res.glossy.append(Closure(label, g[f"N_{tag}0"], g[f"e_{tag}"], g[f"alpha_{tag}"],
-                                  tuple(b[f"w_{tag}"] for b in blocks), g[f"aniso_{tag}"], g[f"U_{tag}0"]))
+                                  tuple(b[f"w_{tag}"] for b in blocks), g[f"aniso_{tag}"], g[f"U_{tag}0"],
+                                  g[f"ax_{tag}"], g[f"ay_{tag}"]))
     return res
 
 
