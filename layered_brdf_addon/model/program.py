@@ -321,16 +321,9 @@ def exit_direction(ops, eta, cos_r, e1):
 
 
 @shader_function
-def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, interference=True, shared=False):
+def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, interference=True):
     """Amplitudes, centres and exponents of the three lobes of each channel (eqs. 3-11).
-    ``r1``, ``lam``: a scalar (one channel) or a triple (three).  ``shared``: the three
-    indices are equal, so every channel's lobes have the same directions (the second
-    channel's are computed, once)."""
-
-    def geometry(x):
-        """The channels whose directions are computed."""
-        return channels(ops, x)[1:2] if shared else channels(ops, x)
-
+    ``r1``, ``lam``: a scalar (one channel) or a triple (three)."""
     f = fresnel_f0(ops, r1, r0)
     F = schlick(ops, cos_v, f)
     # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
@@ -342,17 +335,16 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     entering = ops.gt(k_o, 0.0) * ops.gt(cos_v, 0.0)
     # The light direction l* whose path through the layer leaves along v (eqs. 10, 11):
     # each channel's path, then how it leaves, computed on the channels at once.
-    paths = [layer_path(ops, e, s, cos_v, n0, n1, v) for e, s in zip(geometry(eta), geometry(s_o))]
+    paths = [layer_path(ops, e, s, cos_v, n0, n1, v) for e, s in zip(channels(ops, eta), channels(ops, s_o))]
     cos_r = gather(ops, [p[1] for p in paths])
     to_n1 = gather(ops, [p[2] for p in paths])
-    a, b, cos_ls, s_ls, tail = exit_direction(ops, gather(ops, geometry(eta)), cos_r, e1)
+    a, b, cos_ls, s_ls, tail = exit_direction(ops, eta, cos_r, e1)
     cos_ls = ops.clamp(cos_ls, 0.0, 1.0)
     # Eq. 11: no path, T = 0, and l* is the mirror direction.  A path whose centre cannot
     # leave keeps its tail.
-    through = gather(ops, geometry(entering)) * ops.lt(to_n1, 0.0) * ops.gt(cos_ls, 0.0)
+    through = entering * ops.lt(to_n1, 0.0) * ops.gt(cos_ls, 0.0)
     l_stars = [ops.select_vec(ok, p[0] * ak + n0 * bk, r_v)
                for p, ok, ak, bk in zip(paths, channels(ops, through), channels(ops, a), channels(ops, b))]
-    cos_ls, s_ls, tail, through = (spread(ops, x, r1) for x in (cos_ls, s_ls, tail, through))
     # The in-layer lobe seen from outside: exponent e1 / r1^2, times cos(l*)/cos(t) for the
     # stretch within the plane of incidence (geometric mean of the two directions).
     s_ls = ops.maximum(s_ls, 1e-6)
@@ -368,7 +360,7 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     # Interference, eq. 5: sqrt(R T) of two Phong lobes is a lobe of exponent
     # (e0 + e1')/2 about their weighted centre; phase from eq. 3 at that centre.
     w_sum = ops.maximum(e0 + e1p, 1e-6)
-    c_Is = [ops.normalize(r_v * e0 + ls * e, r_v) for ls, e in zip(l_stars, geometry(e1p))]
+    c_Is = [ops.normalize(r_v * e0 + ls * e, r_v) for ls, e in zip(l_stars, channels(ops, e1p))]
     d_RT = spread(ops, gather(ops, [angle2(ops, r_v, ls) for ls in l_stars]), r1)
     atten = ops.exp(-(e0 * e1p) / (4.0 * w_sum) * d_RT)
     cos_ci = spread(ops, gather(ops, [ops.clamp(ops.dot(c, n0), 0.0, 1.0) for c in c_Is]), r1)
@@ -403,30 +395,23 @@ def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
     return ops.components(colour)
 
 
-def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True, shared=False):
+def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True):
     """The channels' lobes (eqs. 3-11), the fold, and the normals, exponents, alphas and
     weights of their transmitted and interference closures.  A lobe centred on the
     direction c is a closure about normalize(v + c).  ``r1``, ``lam``: a scalar (one
     wavelength) or a triple (the RGB channels).  ``N_T0``.., ``N_I0``..: the closure
-    normals, one per channel, or one for all (``shared``: equal indices, whose closures
-    differ only in their weights)."""
+    normals, one per channel."""
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     r_v = n0 * (2.0 * ops.dot(v, n0)) - v
-    t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference,
-                      shared=shared)
+    t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference)
     AR, AT, AI = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], t["d_RT"], t["d_RI"],
                                    t["d_TI"])
-    n = 3 if ops.is_vector(r1) and not shared else 1
+    n = 3 if ops.is_vector(r1) else 1
     out = dict(AR=AR)
     for tag, amp, centre in (("T", AT, "l_star"), ("I", AI, "c_I")):
         normals = [ops.normalize(v + t[f"{centre}{k}"], n0) for k in range(n)]
-        mu = gather(ops, [ops.dot(N, v) for N in normals])
-        e_within, e_across = t[f"e{tag}_within"], t[f"e{tag}_across"]
-        if shared:  # one closure shape for the three weights
-            e_within, e_across = channels(ops, e_within)[1], channels(ops, e_across)[1]
-        else:
-            mu = spread(ops, mu, r1)
-        w, alpha, aniso, a_x, a_y = lobe_weight(ops, amp, mu, e_within, e_across, lobe=lobe)
+        mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
+        w, alpha, aniso, a_x, a_y = lobe_weight(ops, amp, mu, t[f"e{tag}_within"], t[f"e{tag}_across"], lobe=lobe)
         frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
         out.update({f"N_{tag}{k}": N for k, N in enumerate(normals)})
         out.update({f"U_{tag}{k}": f[0] for k, f in enumerate(frames)})
@@ -598,16 +583,17 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
                 res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}{c}"], e[c], alpha[c], weight,
                                           aniso[c], b[f"U_{tag}{c}"], a_x[c], a_y[c]))
         return res
-    # Equal indices: every channel's lobe has the same centre and shape, computed once;
-    # each channel keeps the weight computed from its own wavelength.
-    b = ops.call("channels", channel_block,
-                 dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), **common),
-                 lobe=plan.lobe, shared=True)
-    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
+    # Equal indices: every channel's lobe has the same centre and exponent (green's are
+    # used); each channel keeps the weight computed from its own wavelength.  One scalar
+    # block per channel: a shader compiler merges what the channels share.
+    blocks = [ops.call("channel", channel_block, dict(r1=r1, lam=float(lam), **common), lobe=plan.lobe)
+              for r1, lam in zip(P["r1"], wavelengths)]
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, tuple(b["AR"] for b in blocks)))
+    g = blocks[1]
     for tag, label in (("T", "transmit"), ("I", "interfere")):
-        res.glossy.append(Closure(label, b[f"N_{tag}0"], ops.components(b[f"e_{tag}"])[1],
-                                  b[f"alpha_{tag}"], ops.components(b[f"w_{tag}"]), b[f"aniso_{tag}"],
-                                  b[f"U_{tag}0"], b[f"ax_{tag}"], b[f"ay_{tag}"]))
+        res.glossy.append(Closure(label, g[f"N_{tag}0"], g[f"e_{tag}"], g[f"alpha_{tag}"],
+                                  tuple(b[f"w_{tag}"] for b in blocks), g[f"aniso_{tag}"], g[f"U_{tag}0"],
+                                  g[f"ax_{tag}"], g[f"ay_{tag}"]))
     return res
 
 
