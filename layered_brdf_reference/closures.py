@@ -21,10 +21,11 @@ Per channel ``c`` and shading point, with ``r_v`` the mirror of ``v`` about ``n0
   ``2 cos(2 Phi) sqrt(A_R A_T) exp(-e0 e1' delta^2 / (4 (e0 + e1')))``, with
   ``delta`` the angle between the two centres and ``Phi`` eq. 3 at that centre.
 
-Cycles clamps negative closure weights to 0, so a destructive interference lobe
-(``cos 2 Phi < 0``) is folded into the other two: its least-squares projection on
-the reflected and transmitted lobes (Gaussian approximation of the lobes in the
-tangent plane) is subtracted from their amplitudes, which are clamped at 0.
+The interference lobe is folded into the other two (Cycles clamps negative closure
+weights to 0, so destructive interference cannot be a closure; constructive
+interference is folded too, a closure fewer per channel): the non-negative
+least-squares fit of the three lobes by the reflected and transmitted lobes
+(Gaussian approximation of the lobes in the tangent plane).
 
 Each amplitude is the pixel value per unit irradiance at the lobe's centre, and is
 turned into a closure weight by dividing by that closure's own value there

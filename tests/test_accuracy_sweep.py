@@ -17,21 +17,22 @@ SPECTRAL_BASE = 3  # x every accuracy mode
 
 # Measured on the coarse sweep below (32 px, 60 RGB configurations, seed 2003; 3 spectral
 # configurations x 5 modes, seed 2004) with the closure form of this commit (anisotropic
-# lobes, transmitted tails through the critical cone, merged spectral groups):
-#   RGB: L1 p50 14.4%, p95 61.9%, max 94.9%; 25 configurations over 20%; 26 holes, 121 ghosts
+# lobes, transmitted tails through the critical cone, merged spectral groups, the
+# interference lobe always folded):
+#   RGB: L1 p50 15.4%, p95 60.2%, max 95.7%; 24 configurations over 20%; 30 holes, 144 ghosts
 #   (before those changes: p50 17.7%, p95 80.9%, 30 over 20%, 316 holes, 213 ghosts).
-#   Spectral design, per mode: L1 p95 37.3-42.5% (worst: rgb); 3 holes per mode.
+#   Spectral design, per mode: L1 p95 35.6-43.5% (worst: rgb); 3 holes per mode.
 # The bounds allow a small margin; lower them when the closure form improves.
-MAX_RGB_L1_P50 = 0.144 + 0.03
-MAX_RGB_L1_P95 = 0.619 + 0.05
-MAX_RGB_OVER_20 = 25 + 3
-MAX_RGB_HOLES = 26 + 10
-MAX_RGB_GHOSTS = 121 + 30
-MAX_SPECTRAL_L1_P95 = 0.425 + 0.05
+MAX_RGB_L1_P50 = 0.154 + 0.03
+MAX_RGB_L1_P95 = 0.602 + 0.05
+MAX_RGB_OVER_20 = 24 + 3
+MAX_RGB_HOLES = 30 + 10
+MAX_RGB_GHOSTS = 144 + 30
+MAX_SPECTRAL_L1_P95 = 0.435 + 0.05
 MAX_SPECTRAL_HOLES = 3 + 3  # per mode
-# Presets under the standard sun at 32 px: every L1 is 0-5.6% but anodised_titanium's, 32.4%.
+# Presets under the standard sun at 32 px: every L1 is 0-6.1% but anodised_titanium's, 32.4%.
 MAX_PRESET_L1 = {"anodised_titanium": 0.324 + 0.03}
-MAX_PRESET_L1_DEFAULT = 0.056 + 0.02
+MAX_PRESET_L1_DEFAULT = 0.061 + 0.02
 
 FINITE_KEYS = ("l1", "l1_sphere", "energy", "de_lit", "de_highlight")
 

@@ -39,7 +39,8 @@ HEADER = """\
  *   - transmitted lobes about l*, the light direction whose path through the layer
  *     leaves along the view, eq. 10;
  *   - interference lobes 2 cos(2 Phi) sqrt(R T), eqs. 3 and 5, folded into the other
- *     two where negative (Cycles clamps negative closure weights to 0).
+ *     two (Cycles clamps negative closure weights to 0, and a closure fewer per channel
+ *     costs less).
  *
  * Each lobe amplitude is the pixel value per unit irradiance at the lobe's centre; it
  * becomes a closure weight by dividing by the closure's own value there.  The diffuse

@@ -15,7 +15,7 @@ class EffectPlan:
     diffuse: bool = True  # kd > 0
     thickness: str = "noise"  # "noise", "height" or "constant" (d_min == d_max: no pattern to evaluate)
     normals: str = "parallel"  # "parallel", "tilted" or "correlated"
-    dispersion: bool = True  # one transmitted and one interference lobe per channel (else shared)
+    dispersion: bool = True  # one transmitted lobe per channel (else one shared)
     lobe: str = "beckmann"
     spectral: int = 0  # 0: the paper's RGB; N: N wavelengths
     interference: bool = True  # False: a spectral layer so thick that interference averages out
@@ -54,6 +54,6 @@ class EffectPlan:
         if not self.interference:
             out.append("no interference: the layer is thick enough for it to average out over the band")
         if self.specular:
-            out.append("per-channel transmitted and interference lobes (dispersion)" if self.dispersion
-                       else "one shared transmitted and one shared interference lobe (equal indices)")
+            out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
+                       else "one shared transmitted lobe (equal indices)")
         return out

@@ -211,10 +211,13 @@ def lobe_correlation(ops, p, q, delta2):
 
 @shader_function
 def fold_interference(ops, AR, AT, AI, eR, eT, eI, dRT, dRI, dTI):
-    """Non-negative least-squares fit of ``AR gR + AT gT + AI gI`` (``AI < 0``) by
-    ``wR gR + wT gT``, unchanged where ``AI >= 0``: Cycles clamps a negative closure weight
-    to 0, so destructive interference (cos 2 Phi < 0, eq. 5) is folded into the reflected
-    and transmitted lobes.  ``d..``: squared angles between the lobes' centres.
+    """Non-negative least-squares fit of ``AR gR + AT gT + AI gI`` by ``wR gR + wT gT``: the
+    interference lobe of eq. 5 (``2 cos(2 Phi) sqrt(R T)``, of either sign) folded into the
+    reflected and transmitted lobes.  Cycles clamps a negative closure weight to 0, so
+    destructive interference cannot be a closure of its own; constructive interference is
+    folded too, which saves a closure per channel (docs/closure-decomposition.md has what
+    that costs in accuracy and saves in time).  ``d..``: squared angles between the lobes'
+    centres.
 
     Gaussian lobes ``g = exp(-e theta^2 / 2)`` in the tangent plane; the normal equations
     are solved in the basis of unit-norm lobes (``|g|^2 = 1/(2e)`` up to a common factor),
@@ -243,11 +246,7 @@ def fold_interference(ops, AR, AT, AI, eR, eT, eI, dRT, dRI, dTI):
     r_better = ops.gt(bR * wR1, bT * wT1)  # the fit that removes more of ||f||^2
     wR = ops.select(both, wR2, ops.select(r_better, wR1, 0.0)) / uR
     wT = ops.select(both, wT2, ops.select(r_better, 0.0, wT1)) / uT
-    neg = ops.lt(AI, 0.0)
-    AR_folded = ops.select(neg, wR, AR)
-    AT_folded = ops.select(neg, wT, AT)
-    AI_folded = ops.select(neg, 0.0, AI)
-    return AR_folded, AT_folded, AI_folded
+    return wR, wT
 
 
 # ---------------------------------------------------------------- the channels
@@ -373,11 +372,9 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     d_RI = spread(ops, gather(ops, [angle2(ops, r_v, c) for c in c_Is]), r1)
     d_TI = spread(ops, gather(ops, [angle2(ops, ls, c) for ls, c in zip(l_stars, c_Is)]), r1)
     out = dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), d_RT=d_RT, d_RI=d_RI, d_TI=d_TI,
-               eT_within=e1_within, eT_across=e1_across, eI_within=0.5 * (e0 + e1_within),
-               eI_across=0.5 * (e0 + e1_across))
-    for k, (ls, c) in enumerate(zip(l_stars, c_Is)):
+               eT_within=e1_within, eT_across=e1_across)
+    for k, ls in enumerate(l_stars):
         out[f"l_star{k}"] = ls
-        out[f"c_I{k}"] = c
     return out
 
 
@@ -396,33 +393,33 @@ def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
 
 
 def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True):
-    """The channels' lobes (eqs. 3-11), the fold, and the normals, exponents, alphas and
-    weights of their transmitted and interference closures.  A lobe centred on the
-    direction c is a closure about normalize(v + c).  ``r1``, ``lam``: a scalar (one
-    wavelength) or a triple (the RGB channels).  ``N_T0``.., ``N_I0``..: the closure
-    normals, one per channel."""
+    """The channels' lobes (eqs. 3-11), the interference folded into the other two, and the
+    normals, exponents, alphas and weights of their transmitted closures.  A lobe centred
+    on the direction c is a closure about normalize(v + c).  ``r1``, ``lam``: a scalar (one
+    wavelength) or a triple (the RGB channels).  ``N_T0``..: the closure normals, one per
+    channel."""
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     r_v = n0 * (2.0 * ops.dot(v, n0)) - v
     t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference)
-    AR, AT, AI = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], t["d_RT"], t["d_RI"],
+    if interference:
+        AR, AT = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], t["d_RT"], t["d_RI"],
                                    t["d_TI"])
+    else:  # no interference lobe to fold
+        AR, AT = t["AR"], t["AT"]
     n = 3 if ops.is_vector(r1) else 1
-    out = dict(AR=AR)
-    for tag, amp, centre in (("T", AT, "l_star"), ("I", AI, "c_I")):
-        normals = [ops.normalize(v + t[f"{centre}{k}"], n0) for k in range(n)]
-        mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
-        w, alpha, aniso, a_x, a_y = lobe_weight(ops, amp, mu, t[f"e{tag}_within"], t[f"e{tag}_across"], lobe=lobe)
-        frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
-        out.update({f"N_{tag}{k}": N for k, N in enumerate(normals)})
-        out.update({f"U_{tag}{k}": f[0] for k, f in enumerate(frames)})
-        out.update({f"e_{tag}": t[f"e{tag}"], f"alpha_{tag}": alpha, f"w_{tag}": w,
-                    f"aniso_{tag}": gather(ops, [f[1] for f in frames]), f"ax_{tag}": a_x, f"ay_{tag}": a_y})
+    normals = [ops.normalize(v + t[f"l_star{k}"], n0) for k in range(n)]
+    mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
+    w, alpha, aniso, a_x, a_y = lobe_weight(ops, AT, mu, t["eT_within"], t["eT_across"], lobe=lobe)
+    frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
+    out = dict(AR=AR, e_T=t["eT"], alpha_T=alpha, w_T=w, aniso_T=gather(ops, [f[1] for f in frames]),
+               ax_T=a_x, ay_T=a_y)
+    out.update({f"N_T{k}": N for k, N in enumerate(normals)})
+    out.update({f"U_T{k}": f[0] for k, f in enumerate(frames)})
     return out
 
 
-def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc_I2,
-                  lead_T0, lead_T1, lead_T2, lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI,
-                  lead_nT, lead_nI, r1, lam, m, in0, in1, in2, is0, is1, is2, e0, e1, ks, kd, r0, n0, n1, v, d,
+def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, lead_T0, lead_T1, lead_T2, lead_eT, lead_aT,
+                  lead_nT, r1, lam, m, in0, in1, in2, is0, is1, is2, e0, e1, ks, kd, r0, n0, n1, v, d,
                   lobe="beckmann", diffuse=True, interference=True):
     """One wavelength of the spectral mode, chained: it takes the running sums and returns
     them updated, so a shader holds only the sums, whatever the number of wavelengths.
@@ -436,8 +433,7 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
     # Everything this step computes waits for the whole previous state, so that a node
     # backend evaluates the steps one after the other and only the running state stays
     # alive, whatever the number of wavelengths (Cycles' SVM has a stack of 255 floats).
-    state = (acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc_I2, lead_T0, lead_T1, lead_T2,
-             lead_I0, lead_I1, lead_I2, lead_eT, lead_eI, lead_aT, lead_aI, lead_nT, lead_nI)
+    state = (acc_R, acc_D, acc_T0, acc_T1, acc_T2, lead_T0, lead_T1, lead_T2, lead_eT, lead_aT, lead_nT)
     d = ops.after(state, d)
     r1 = ops.after(state, r1)  # everything that depends on the index waits too
     if diffuse and not interference:
@@ -448,20 +444,17 @@ def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, acc_I0, acc_I1, acc
         out["acc_D"] = acc_D
     b = channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe, interference)
     out["acc_R"] = acc_R + m * b["AR"]
-    for tag, accs, leads, e_lead, a_lead, n_lead in (
-            ("T", (acc_T0, acc_T1, acc_T2), (lead_T0, lead_T1, lead_T2), lead_eT, lead_aT, lead_nT),
-            ("I", (acc_I0, acc_I1, acc_I2), (lead_I0, lead_I1, lead_I2), lead_eI, lead_aI, lead_nI)):
-        w = b[f"w_{tag}"]
-        e_parts, a_parts, n_parts = [], [], []
-        for g, (acc, lead, member, is_lead) in enumerate(zip(accs, leads, (in0, in1, in2), (is0, is1, is2))):
-            out[f"acc_{tag}{g}"] = acc + m * (w * member)
-            out[f"lead_{tag}{g}"] = ops.select_vec(is_lead, b[f"N_{tag}0"], lead)
-            e_parts.append(ops.select(is_lead, b[f"e_{tag}"], ops.dot(e_lead, _UNIT[g])))
-            a_parts.append(ops.select(is_lead, b[f"alpha_{tag}"], ops.dot(a_lead, _UNIT[g])))
-            n_parts.append(ops.select(is_lead, b[f"aniso_{tag}"], ops.dot(n_lead, _UNIT[g])))
-        out[f"lead_e{tag}"] = ops.combine(*e_parts)
-        out[f"lead_a{tag}"] = ops.combine(*a_parts)
-        out[f"lead_n{tag}"] = ops.combine(*n_parts)
+    e_parts, a_parts, n_parts = [], [], []
+    for g, (acc, lead, member, is_lead) in enumerate(zip((acc_T0, acc_T1, acc_T2), (lead_T0, lead_T1, lead_T2),
+                                                         (in0, in1, in2), (is0, is1, is2))):
+        out[f"acc_T{g}"] = acc + m * (b["w_T"] * member)
+        out[f"lead_T{g}"] = ops.select_vec(is_lead, b["N_T0"], lead)
+        e_parts.append(ops.select(is_lead, b["e_T"], ops.dot(lead_eT, _UNIT[g])))
+        a_parts.append(ops.select(is_lead, b["alpha_T"], ops.dot(lead_aT, _UNIT[g])))
+        n_parts.append(ops.select(is_lead, b["aniso_T"], ops.dot(lead_nT, _UNIT[g])))
+    out["lead_eT"] = ops.combine(*e_parts)
+    out["lead_aT"] = ops.combine(*a_parts)
+    out["lead_nT"] = ops.combine(*n_parts)
     return out
 
 
@@ -508,8 +501,8 @@ def merged_group_weights(ops, accs):
 def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     """Spectral mode: the channel program at N wavelengths (``r1(lambda)`` from the Cauchy
     fit through the three indices, a linear map), summed into RGB closures with baked
-    CIE 1931 / D65 weights (model/spectral_tables.py).  Transmitted and interference lobes
-    keep a bounded number of directions: each wavelength joins the lobe of the nearest of
+    CIE 1931 / D65 weights (model/spectral_tables.py).  Transmitted lobes keep a bounded
+    number of directions: each wavelength joins the lobe of the nearest of
     the three RGB wavelengths (three directions with dispersion, one without), whose
     centre and exponent are those of the group's wavelength nearest to it.
     """
@@ -519,10 +512,8 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     lams, K, M = t["wavelengths"], t["cauchy"], t["rgb"]
     groups, leads = spectral_groups(lams, plan.dispersion)
     zero = (0.0, 0.0, 0.0)
-    state = dict(acc_R=zero, acc_D=zero, acc_T0=zero, acc_T1=zero, acc_T2=zero, acc_I0=zero, acc_I1=zero,
-                 acc_I2=zero, lead_T0=n0, lead_T1=n0, lead_T2=n0, lead_I0=n0, lead_I1=n0, lead_I2=n0,
-                 lead_eT=(1.0, 1.0, 1.0), lead_eI=(1.0, 1.0, 1.0), lead_aT=(1.0, 1.0, 1.0), lead_aI=(1.0, 1.0, 1.0),
-                 lead_nT=zero, lead_nI=zero)
+    state = dict(acc_R=zero, acc_D=zero, acc_T0=zero, acc_T1=zero, acc_T2=zero, lead_T0=n0, lead_T1=n0,
+                 lead_T2=n0, lead_eT=(1.0, 1.0, 1.0), lead_aT=(1.0, 1.0, 1.0), lead_nT=zero)
     for j, (k, lam, m) in enumerate(zip(K, lams, M)):
         r1 = ops.clamp(k[0] * P["r1"][0] + k[1] * P["r1"][1] + k[2] * P["r1"][2], 0.1, 5.0)
         member = [1.0 if groups[j] == g else 0.0 for g in range(3)]
@@ -543,13 +534,12 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     if not plan.specular:
         return res
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(state["acc_R"])))
-    for tag, label in (("T", "transmit"), ("I", "interfere")):
-        weights = merged_group_weights(ops, [state[f"acc_{tag}{g}"] for g in sorted(leads)])
-        for g, w in zip(sorted(leads), weights):
-            N = state[f"lead_{tag}{g}"]
-            tangent, aniso = closure_tangent(ops, N, v, ops.dot(state[f"lead_n{tag}"], _UNIT[g]))
-            res.glossy.append(Closure(f"{label}_{g}", N, ops.dot(state[f"lead_e{tag}"], _UNIT[g]),
-                                      ops.dot(state[f"lead_a{tag}"], _UNIT[g]), w, aniso, tangent))
+    weights = merged_group_weights(ops, [state[f"acc_T{g}"] for g in sorted(leads)])
+    for g, w in zip(sorted(leads), weights):
+        N = state[f"lead_T{g}"]
+        tangent, aniso = closure_tangent(ops, N, v, ops.dot(state["lead_nT"], _UNIT[g]))
+        res.glossy.append(Closure(f"transmit_{g}", N, ops.dot(state["lead_eT"], _UNIT[g]),
+                                  ops.dot(state["lead_aT"], _UNIT[g]), w, aniso, tangent))
     return res
 
 
@@ -575,13 +565,11 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
                      dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), **common),
                      lobe=plan.lobe)
         res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
-        for tag, label in (("T", "transmit"), ("I", "interfere")):
-            e, alpha, w, aniso, a_x, a_y = (ops.components(b[f"{k}_{tag}"])
-                                            for k in ("e", "alpha", "w", "aniso", "ax", "ay"))
-            for c in range(3):
-                weight = tuple(w[c] if k == c else 0.0 for k in range(3))
-                res.glossy.append(Closure(f"{label}_{'rgb'[c]}", b[f"N_{tag}{c}"], e[c], alpha[c], weight,
-                                          aniso[c], b[f"U_{tag}{c}"], a_x[c], a_y[c]))
+        e, alpha, w, aniso, a_x, a_y = (ops.components(b[f"{k}_T"]) for k in ("e", "alpha", "w", "aniso", "ax", "ay"))
+        for c in range(3):
+            weight = tuple(w[c] if k == c else 0.0 for k in range(3))
+            res.glossy.append(Closure(f"transmit_{'rgb'[c]}", b[f"N_T{c}"], e[c], alpha[c], weight,
+                                      aniso[c], b[f"U_T{c}"], a_x[c], a_y[c]))
         return res
     # Equal indices: every channel's lobe has the same centre and exponent (green's are
     # used); each channel keeps the weight computed from its own wavelength.  One scalar
@@ -590,10 +578,8 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
               for r1, lam in zip(P["r1"], wavelengths)]
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, tuple(b["AR"] for b in blocks)))
     g = blocks[1]
-    for tag, label in (("T", "transmit"), ("I", "interfere")):
-        res.glossy.append(Closure(label, g[f"N_{tag}0"], g[f"e_{tag}"], g[f"alpha_{tag}"],
-                                  tuple(b[f"w_{tag}"] for b in blocks), g[f"aniso_{tag}"], g[f"U_{tag}0"],
-                                  g[f"ax_{tag}"], g[f"ay_{tag}"]))
+    res.glossy.append(Closure("transmit", g["N_T0"], g["e_T"], g["alpha_T"], tuple(b["w_T"] for b in blocks),
+                              g["aniso_T"], g["U_T0"], g["ax_T"], g["ay_T"]))
     return res
 
 
