@@ -80,6 +80,8 @@ def beckmann_eval(N, v, l, alpha, aniso=0.0, T=None):
     """Cycles' Beckmann closure (no Fresnel): ``D / (4 cosNV (1 + Lambda_V + Lambda_L))``, cosine
     included; anisotropic about the tangent ``T`` (frame as Cycles' make_orthonormals_tangent)."""
     ax, ay = glossy_alphas(alpha, aniso)
+    # Isotropic closures (|anisotropy| <= 1e-4) ignore the tangent, which may be zero.
+    iso = np.broadcast_to(np.abs(np.clip(np.asarray(aniso, dtype=float), -0.99, 0.99)) <= 1e-4, np.shape(N)[:-1])
     if T is None:
         T = np.broadcast_to(np.array([1.0, 0.0, 0.0]), np.shape(N))
     Y = safe_normalize(np.cross(N, np.broadcast_to(T, np.shape(N))), N)
@@ -89,12 +91,15 @@ def beckmann_eval(N, v, l, alpha, aniso=0.0, T=None):
     h = safe_normalize(v + l, N)
     hz, hx, hy = dot(h, N), dot(h, X), dot(h, Y)
     with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-        e = (hx * hx / (ax * ax) + hy * hy / (ay * ay)) / np.maximum(hz * hz, 1e-300)
-        D = np.exp(-e) / (np.pi * ax * ay * hz ** 4)
+        e_aniso = (hx * hx / (ax * ax) + hy * hy / (ay * ay)) / np.maximum(hz * hz, 1e-300)
+        e_iso = np.maximum(1.0 - hz * hz, 0.0) / np.maximum(hz * hz * ax * ax, 1e-300)
+        D = np.exp(-np.where(iso, e_iso, e_aniso)) / (np.pi * ax * ay * hz ** 4)
 
         def lam(w):
             wz, wx, wy = dot(w, N), dot(w, X), dot(w, Y)
-            return _lambda_from(((ax * wx) ** 2 + (ay * wy) ** 2) / np.maximum(wz * wz, 1e-30))
+            t_aniso = ((ax * wx) ** 2 + (ay * wy) ** 2) / np.maximum(wz * wz, 1e-30)
+            t_iso = ax * ax * np.maximum(1.0 / np.maximum(wz * wz, 1e-30) - 1.0, 0.0)
+            return _lambda_from(np.where(iso, t_iso, t_aniso))
 
         val = D / (4.0 * np.maximum(cos_nv, 1e-30) * (1.0 + lam(v) + lam(l)))
     val = np.where(np.isfinite(val) & (hz > 0.0), val, 0.0)
