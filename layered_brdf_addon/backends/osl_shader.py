@@ -216,13 +216,11 @@ def shader_source(plan: EffectPlan) -> str:
         ops.raw("/* Eqs. 14-18: a Lambertian closure about n0 tinted by kd base rho_d. */")
         ops.raw(f"BSDF += {_colour(ops, res.diffuse)} * diffuse({ops.use(x['upper_normal'])});")
     for cl in res.glossy:
-        # The alphas along the tangent and across it (Phong ignores them).
-        if plan.lobe != "beckmann":
-            a_x = a_y = cl.alpha
-        elif cl.alpha_x is not None:
-            a_x, a_y = cl.alpha_x, cl.alpha_y
-        else:
-            a_x, a_y = program.glossy_alphas(ops, cl.alpha, cl.anisotropy)
+        # The alphas along the tangent and across it, as the Glossy BSDF node derives them
+        # (an isotropic lobe gets two equal alphas, so its tangent, which may vanish, is
+        # never used); Phong ignores them.
+        a_x, a_y = (program.glossy_alphas(ops, cl.alpha, cl.anisotropy) if plan.lobe == "beckmann"
+                    else (cl.alpha, cl.alpha))
         ops.raw(f"BSDF += glossy_lobe({ops.use(cl.normal)}, {ops.use(cl.tangent)}, {ops.use(cl.exponent)}, "
                 f"{ops.use(a_x)}, {ops.use(a_y)}, {_colour(ops, cl.weight)});  /* {cl.name} */")
     ops.raw(f"Thickness = {ops.use(x['thickness'])};")

@@ -59,8 +59,6 @@ class Closure:
     weight: tuple  # (r, g, b) scalars
     anisotropy: Any = 0.0  # the Glossy BSDF's Anisotropy: the lobe's stretch along ``tangent``
     tangent: Any = None
-    alpha_x: Any = None  # the alphas along the tangent and across it (OSL's microfacet())
-    alpha_y: Any = None
 
 
 @dataclass
@@ -144,7 +142,7 @@ def lobe_alphas(ops, e_within, e_across, mu):
 @shader_function
 def glossy_alphas(ops, alpha, aniso):
     """Cycles' Beckmann alphas along the tangent and across it (``alpha_x``, ``alpha_y``) from
-    the Glossy BSDF's alpha and anisotropy (where a closure carries only those)."""
+    the Glossy BSDF's alpha and anisotropy, as the node derives them."""
     neg = ops.lt(aniso, 0.0)
     a_x = ops.select(neg, alpha / (1.0 + aniso), alpha * (1.0 - aniso))
     a_y = ops.select(neg, alpha * (1.0 + aniso), alpha / (1.0 - aniso))
@@ -176,12 +174,12 @@ def closure_tangent(ops, N, v, aniso):
 @shader_function
 def lobe_weight(ops, amplitude, mu, e_within, e_across, *, lobe):
     """The closure whose value at its centre equals ``amplitude``, for a view at cosine
-    ``mu`` from its normal: its weight, alpha and anisotropy, and the two alphas."""
+    ``mu`` from its normal: its weight, alpha and anisotropy."""
     alpha, aniso, a_x, a_y = lobe_alphas(ops, e_within, e_across, mu)
     # Phong lobes are round: the geometric mean of the two exponents.
     e = ops.sqrt(e_within * e_across) if lobe == "phong" else e_within
     weight = amplitude / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe)
-    return weight, alpha, aniso, a_x, a_y
+    return weight, alpha, aniso
 
 
 def closure_for(ops, lobe, name, normal, e, v, amplitudes):
@@ -191,7 +189,7 @@ def closure_for(ops, lobe, name, normal, e, v, amplitudes):
     tangent, aniso = closure_tangent(ops, normal, v, aniso)
     tangent = ops.named(f"tangent_{name}", tangent)
     inv = ops.named(f"inv_peak_{name}", 1.0 / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe))
-    return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes), aniso, tangent, a_x, a_y)
+    return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes), aniso, tangent)
 
 
 @shader_function
@@ -409,10 +407,9 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", i
     n = 3 if ops.is_vector(r1) else 1
     normals = [ops.normalize(v + t[f"l_star{k}"], n0) for k in range(n)]
     mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
-    w, alpha, aniso, a_x, a_y = lobe_weight(ops, AT, mu, t["eT_within"], t["eT_across"], lobe=lobe)
+    w, alpha, aniso = lobe_weight(ops, AT, mu, t["eT_within"], t["eT_across"], lobe=lobe)
     frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
-    out = dict(AR=AR, e_T=t["eT"], alpha_T=alpha, w_T=w, aniso_T=gather(ops, [f[1] for f in frames]),
-               ax_T=a_x, ay_T=a_y)
+    out = dict(AR=AR, e_T=t["eT"], alpha_T=alpha, w_T=w, aniso_T=gather(ops, [f[1] for f in frames]))
     out.update({f"N_T{k}": N for k, N in enumerate(normals)})
     out.update({f"U_T{k}": f[0] for k, f in enumerate(frames)})
     return out
@@ -565,11 +562,11 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
                      dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), **common),
                      lobe=plan.lobe)
         res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
-        e, alpha, w, aniso, a_x, a_y = (ops.components(b[f"{k}_T"]) for k in ("e", "alpha", "w", "aniso", "ax", "ay"))
+        e, alpha, w, aniso = (ops.components(b[f"{k}_T"]) for k in ("e", "alpha", "w", "aniso"))
         for c in range(3):
             weight = tuple(w[c] if k == c else 0.0 for k in range(3))
             res.glossy.append(Closure(f"transmit_{'rgb'[c]}", b[f"N_T{c}"], e[c], alpha[c], weight,
-                                      aniso[c], b[f"U_T{c}"], a_x[c], a_y[c]))
+                                      aniso[c], b[f"U_T{c}"]))
         return res
     # Equal indices: every channel's lobe has the same centre and exponent (green's are
     # used); each channel keeps the weight computed from its own wavelength.  One scalar
@@ -579,7 +576,7 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, tuple(b["AR"] for b in blocks)))
     g = blocks[1]
     res.glossy.append(Closure("transmit", g["N_T0"], g["e_T"], g["alpha_T"], tuple(b["w_T"] for b in blocks),
-                              g["aniso_T"], g["U_T0"], g["ax_T"], g["ay_T"]))
+                              g["aniso_T"], g["U_T0"]))
     return res
 
 
