@@ -1,4 +1,6 @@
-"""Error vs cost plot from benchmarks/results/{accuracy,render_cost}.json.
+"""Error vs cost plot from benchmarks/results/accuracy.json and the render costs of
+benchmarks/results/scene_cost.json (the realistic scene; render_cost.json, the reference
+sphere, where it is missing).
 
 Left: the numpy evaluation of each mode (RGB and spectral N), cost relative to RGB,
 mean CIEDE2000 of the specular part to the 1 nm ground truth.  Right: the Cycles
@@ -34,7 +36,8 @@ def pareto(points):
 
 def load():
     acc = json.loads((HERE / "results" / "accuracy.json").read_text())
-    cost = json.loads((HERE / "results" / "render_cost.json").read_text())
+    scene = HERE / "results" / "scene_cost.json"
+    cost = json.loads(scene.read_text()) if scene.exists() else None
     modes = acc["accuracy"]["modes"]
     thr = acc["throughput"]
     rgb_key = next(k for k in modes if k.startswith("RGB"))
@@ -44,6 +47,18 @@ def load():
                           name.split(" (")[0]))
     levels = acc["accuracy"]["closure_levels"]
     shader_pts = []
+    if cost is not None:  # the realistic scene: fig6_medium in every accuracy mode, both backends
+        for r in cost["cycles"]:
+            if r.get("preset") != "fig6_medium" or r.get("backend") not in ("nodes", "osl"):
+                continue
+            mode = r["accuracy"]
+            level = "closure form (beckmann)" if mode == "rgb" else \
+                f"closure form (beckmann), spectral {mode[len('spectral'):]}"
+            if level in levels:
+                label = f"{r['backend']} {'RGB' if mode == 'rgb' else mode.replace('spectral', 'spectral ')}"
+                shader_pts.append((r["vs_reference"], levels[level]["vs_ground_truth"]["all"]["mean"], label))
+        return numpy_pts, shader_pts
+    cost = json.loads((HERE / "results" / "render_cost.json").read_text())
     mode_rows = [r for r in cost["rows"] if r.get("which") == "mode"]
     if mode_rows:
         for r in mode_rows:
