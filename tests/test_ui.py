@@ -21,6 +21,7 @@ import layered_brdf_addon
 from layered_brdf_addon.blender import assets, osl, properties, registration, ui, user_presets
 from layered_brdf_addon.blender import scene as S
 from layered_brdf_addon.blender import material as M
+from layered_brdf_addon.backends.osl_shader import SOCKET_NAMES
 from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.model import LayeredParams, preset, render_spheres
 from layered_brdf_reference.closures import closure_shading
@@ -259,6 +260,14 @@ def preset_row(request):
             load_preset(obj, name)  # through the operator
         else:
             properties.apply_to_object(obj, preset(name), backend="osl")
+        if preset(name).base_layer == "transparent":
+            # A transparent film shows the sphere's far wall through it (its own highlights, and
+            # its thickness and lower normal in the AOVs), which the closure form of the front
+            # surface does not hold: the film is compared over an empty base.
+            inputs = shader_node(obj.active_material).inputs
+            base = inputs.get("Base Shader") or inputs[SOCKET_NAMES["Base Shader"]]  # node group, OSL
+            assert [link.from_node.bl_idname for link in base.links] == ["ShaderNodeBsdfTransparent"]
+            obj.active_material.node_tree.links.remove(base.links[0])
     passes = S.render_passes_osl() if backend == "osl" else S.render_passes()
     return SimpleNamespace(backend=backend, names=names, objs=objs, cam=cam, centers=centers, passes=passes)
 
