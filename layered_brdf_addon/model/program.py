@@ -172,12 +172,11 @@ def closure_tangent(ops, N, v, aniso):
 
 
 @shader_function
-def lobe_weight(ops, amplitude, mu, e_within, e_across, *, lobe):
+def lobe_weight(ops, amplitude, mu, e, e_within, e_across, *, lobe):
     """The closure whose value at its centre equals ``amplitude``, for a view at cosine
-    ``mu`` from its normal: its weight, alpha and anisotropy."""
+    ``mu`` from its normal: its weight, alpha and anisotropy.  ``e``: the round exponent
+    (the geometric mean of the two) that Phong lobes take."""
     alpha, aniso, a_x, a_y = lobe_alphas(ops, e_within, e_across, mu)
-    # Phong lobes are round: the geometric mean of the two exponents.
-    e = ops.sqrt(e_within * e_across) if lobe == "phong" else e_within
     weight = amplitude / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe)
     return weight, alpha, aniso
 
@@ -344,12 +343,12 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
                for p, ok, ak, bk in zip(paths, channels(ops, through), channels(ops, a), channels(ops, b))]
     # The in-layer lobe seen from outside: exponent e1 / r1^2, times cos(l*)/cos(t) for the
     # stretch within the plane of incidence (geometric mean of the two directions).
-    s_ls = ops.maximum(s_ls, 1e-6)
-    e1p = e1 / (r1 * r1) * ops.select(through, cos_ls / s_ls, 1.0)
-    # The same stretch per axis: across the plane of incidence e1 / r1^2, within it
-    # e1 / r1^2 (cos(l*)/cos(t))^2 (the closures are anisotropic).
+    # Per axis (the closures are anisotropic): across the plane of incidence e1 / r1^2,
+    # within it e1 / r1^2 (cos(l*)/cos(t))^2.
+    stretch = ops.select(through, cos_ls / ops.maximum(s_ls, 1e-6), 1.0)
     e1_across = e1 / (r1 * r1)
-    e1_within = e1p * ops.select(through, cos_ls / s_ls, 1.0)
+    e1p = e1_across * stretch
+    e1_within = e1p * stretch
     Tc = transmission_factor(ops, s_o, f)
     F_l = schlick(ops, cos_ls, f)
     AT_amp = ks * (1.0 - F_l) * Tc * (e1 + 2.0) * INV_2PI / (r1 * r1) * tail
@@ -407,7 +406,7 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", i
     n = 3 if ops.is_vector(r1) else 1
     normals = [ops.normalize(v + t[f"l_star{k}"], n0) for k in range(n)]
     mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
-    w, alpha, aniso = lobe_weight(ops, AT, mu, t["eT_within"], t["eT_across"], lobe=lobe)
+    w, alpha, aniso = lobe_weight(ops, AT, mu, t["eT"], t["eT_within"], t["eT_across"], lobe=lobe)
     frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
     out = dict(AR=AR, e_T=t["eT"], alpha_T=alpha, w_T=w, aniso_T=gather(ops, [f[1] for f in frames]))
     out.update({f"N_T{k}": N for k, N in enumerate(normals)})
