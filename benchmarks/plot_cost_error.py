@@ -47,27 +47,25 @@ def load():
                           name.split(" (")[0]))
     levels = acc["accuracy"]["closure_levels"]
     shader_pts = []
+
+    def mode_point(ratio, backend, mode):
+        """(cost ratio, mean CIEDE2000 of the mode's closure form, label), or None."""
+        level = "closure form (beckmann)" if mode == "rgb" else \
+            f"closure form (beckmann), spectral {mode[len('spectral'):]}"
+        if level not in levels:
+            return None
+        label = f"{backend} {'RGB' if mode == 'rgb' else mode.replace('spectral', 'spectral ')}"
+        return ratio, levels[level]["vs_ground_truth"]["all"]["mean"], label
+
     if cost is not None:  # the realistic scene: fig6_medium in every accuracy mode, both backends
-        for r in cost["cycles"]:
-            if r.get("preset") != "fig6_medium" or r.get("backend") not in ("nodes", "osl"):
-                continue
-            mode = r["accuracy"]
-            level = "closure form (beckmann)" if mode == "rgb" else \
-                f"closure form (beckmann), spectral {mode[len('spectral'):]}"
-            if level in levels:
-                label = f"{r['backend']} {'RGB' if mode == 'rgb' else mode.replace('spectral', 'spectral ')}"
-                shader_pts.append((r["vs_reference"], levels[level]["vs_ground_truth"]["all"]["mean"], label))
-        return numpy_pts, shader_pts
+        points = [mode_point(r["vs_reference"], r["backend"], r["accuracy"]) for r in cost["cycles"]
+                  if r.get("preset") == "fig6_medium" and r.get("backend") in ("nodes", "osl")]
+        return numpy_pts, [p for p in points if p is not None]
     cost = json.loads((HERE / "results" / "render_cost.json").read_text())
     mode_rows = [r for r in cost["rows"] if r.get("which") == "mode"]
     if mode_rows:
-        for r in mode_rows:
-            mode = r["mode"]
-            level = "closure form (beckmann)" if mode == "rgb" else \
-                f"closure form (beckmann), spectral {mode[len('spectral'):]}"
-            if level in levels:
-                label = f"{r['backend']} {'RGB' if mode == 'rgb' else mode.replace('spectral', 'spectral ')}"
-                shader_pts.append((r["vs_principled"], levels[level]["vs_ground_truth"]["all"]["mean"], label))
+        points = [mode_point(r["vs_principled"], r["backend"], r["mode"]) for r in mode_rows]
+        shader_pts = [p for p in points if p is not None]
     else:
         for backend, lobe, level in (("nodes", "beckmann", "closure form (beckmann)"),
                                      ("osl", "beckmann", "closure form (beckmann)"),
