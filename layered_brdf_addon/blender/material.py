@@ -11,6 +11,7 @@ from ..model import policy
 from ..model.policy import plan_effects
 from . import osl as osl_backend
 from ..backends import node_group as node_group_builder
+from ..backends.osl_shader import SOCKET_NAMES
 
 MATERIAL_KEY = "layered_brdf"  # custom property marking materials made by the add-on
 AOV_THICKNESS = "layer_thickness"
@@ -178,8 +179,8 @@ def read_inputs(node, base: LayeredParams | None = None) -> LayeredParams:
 
 
 OWN_PREFIX = "Layered BRDF"  # nodes the add-on creates (and may delete); the artist's are kept
-_SOCKET_ALIASES = {"Base Color": "BaseColor", "Base Shader": "Base", "Lower Normal": "LowerNormal",
-                   "Upper Normal": "UpperNormal"}
+# The node group's socket names and the OSL shader's, either way round.
+_SOCKET_ALIASES = {k: v for k, v in SOCKET_NAMES.items() if k != v}
 _SOCKET_ALIASES.update({v: k for k, v in list(_SOCKET_ALIASES.items())})
 
 
