@@ -8,6 +8,8 @@ from functools import partial
 import numpy as np
 import pytest
 
+from layered_brdf_addon.model.brdf import specular_brdf
+from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_reference import sweep as S
 from layered_brdf_reference.closures import closure_shading
 
@@ -192,9 +194,6 @@ def test_closure_form_has_the_exact_value_at_the_mirror_direction(view_deg):
     the closure form is built to give the exact value there: within 7% out to 70 degrees.
     At a normal view the closures' tangents vanish and the lobes must fall back to
     isotropic, not to zero."""
-    from layered_brdf_addon.model.brdf import specular_brdf
-    from layered_brdf_addon.model.params import LayeredParams
-
     p = LayeredParams.from_dict(dict(r1_r=1.5, r1_g=1.5, r1_b=1.5, e0=130.0, e1=130.0, ks=1.0, kd=0.0,
                                      d_min=0.0, d_max=0.0, thickness_mode="height", normal_mode="parallel"))
     t = math.radians(view_deg)

@@ -6,10 +6,8 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +25,7 @@ from layered_brdf_addon.model.params import PARAM_SPECS, LayeredParams, Paramete
 from layered_brdf_addon.model.presets import PAPER_PRESETS, preset
 
 from constants import MAX_FAILING, REL_TOL
+from process_helpers import interrupt_once_started, start_cli, stop
 
 TIMEOUT = 240
 
@@ -265,23 +264,14 @@ def test_render_on_an_object_of_a_blend(tmp_path, blend_file):
 @pytest.mark.slow
 def test_interrupt_leaves_no_partial_files(tmp_path):
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "layered_brdf_addon", "render", "--preset", "fig4_tilted",
-                             "--resolution", "320", "--samples", "64", "--output", str(out / "x")], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = start_cli("render", "--preset", "fig4_tilted", "--resolution", 320, "--samples", 64,
+                     "--output", out / "x", cwd=tmp_path)
     try:
-        deadline = time.monotonic() + 120
-        while not out.exists() and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.2)
-        time.sleep(0.5)
-        assert proc.poll() is None, "the render ended before it could be interrupted"
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
+        err, seconds = interrupt_once_started(proc, out)
     finally:
-        if proc.poll() is None:
-            proc.kill()
+        stop(proc)
     assert proc.returncode == 130, err
-    assert time.monotonic() - t0 < 10
+    assert seconds < 10
     assert "no partial output" in err
     assert files_under(out) == []
 

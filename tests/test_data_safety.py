@@ -18,6 +18,8 @@ from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.backends import node_group as node_group_builder
 from layered_brdf_addon.model import preset
 
+from blender_helpers import activate, add_sphere, load_preset
+
 ROOT = Path(__file__).resolve().parents[1]
 STAMP = node_group_builder.STAMP_KEY
 
@@ -34,28 +36,8 @@ def addon():
 
 
 def plain_object(name="Small"):
-    import bmesh
-
-    mesh = bpy.data.meshes.new(name)
-    bm = bmesh.new()
-    bmesh.ops.create_uvsphere(bm, u_segments=8, v_segments=4, radius=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
-    obj = bpy.data.objects.new(name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    bpy.context.scene.render.engine = "CYCLES"
-    return activate(obj)
-
-
-def activate(obj):
-    bpy.context.view_layer.objects.active = obj
-    return obj
-
-
-def load_preset(obj, name):
-    activate(obj)
-    assert bpy.ops.layered_brdf.load_preset(preset=name) == {"FINISHED"}
-    return obj.active_material
+    """A coarse sphere added to the current file (several per test)."""
+    return add_sphere(name, u_segments=8, v_segments=4)
 
 
 def output_node(mat):

@@ -11,7 +11,6 @@ import http.server
 import json
 import os
 import shutil
-import signal
 import socket
 import subprocess
 import sys
@@ -20,6 +19,8 @@ import time
 from pathlib import Path
 
 import pytest
+
+from process_helpers import interrupt_once_started, start_cli, stop
 
 REPO = Path(__file__).resolve().parents[1]
 TIMEOUT = 240
@@ -44,21 +45,6 @@ def cli(*args, cwd: Path, env: dict | None = None, timeout: float = TIMEOUT) -> 
     return subprocess.run([sys.executable, "-m", "layered_brdf_addon", *map(str, args)], cwd=cwd,
                           env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
                           capture_output=True, text=True, timeout=timeout)
-
-
-def start_cli(*args, cwd: Path, env: dict | None = None) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "layered_brdf_addon", *map(str, args)], cwd=cwd,
-                            env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-
-def stop(proc: subprocess.Popen) -> None:
-    if proc.poll() is None:
-        proc.kill()
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            pass
 
 
 def entries(folder: Path) -> list[str]:
@@ -385,13 +371,7 @@ def test_interrupted_render_leaves_no_temp_folder(tmp_path, tmpdir_env):
     proc = start_cli("render", "--preset", "fig4_tilted", "--resolution", 320, "--samples", 64,
                      "--output", out / "x", cwd=tmp_path, env=env)
     try:
-        deadline = time.monotonic() + 120
-        while not out.exists() and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.2)
-        time.sleep(0.5)
-        assert proc.poll() is None, "the render ended before it could be interrupted"
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
+        err, _ = interrupt_once_started(proc, out)
     finally:
         stop(proc)
     assert proc.returncode == 130, err

@@ -21,7 +21,6 @@ import layered_brdf_addon
 from layered_brdf_addon.blender import assets, osl, properties, registration, ui, user_presets
 from layered_brdf_addon.blender import scene as S
 from layered_brdf_addon.blender import material as M
-from layered_brdf_addon.backends.osl_shader import SOCKET_NAMES
 from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.model import LayeredParams, preset, render_spheres
 from layered_brdf_reference.closures import closure_shading
@@ -31,6 +30,7 @@ from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model.presets import PRESETS
 from layered_brdf_addon.backends import node_group as node_group_builder
 
+from blender_helpers import activate, add_sphere, load_preset
 from constants import MAX_FAILING_COARSE as MAX_FAILING, REL_TOL_COARSE as REL_TOL, SUN_40 as SUN
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -63,29 +63,8 @@ def spheres(n=1, height=64, osl=False):
 
 def plain_object():
     """A new file holding one small sphere in a Cycles scene (for tests that do not render)."""
-    import bmesh
-
     S.reset_blender()
-    mesh = bpy.data.meshes.new("Small")
-    bm = bmesh.new()
-    bmesh.ops.create_uvsphere(bm, u_segments=16, v_segments=8, radius=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
-    obj = bpy.data.objects.new("Small", mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    bpy.context.scene.render.engine = "CYCLES"
-    return activate(obj)
-
-
-def activate(obj):
-    bpy.context.view_layer.objects.active = obj
-    return obj
-
-
-def load_preset(obj, name):
-    activate(obj)
-    assert bpy.ops.layered_brdf.load_preset(preset=name) == {"FINISHED"}
-    return obj.active_material
+    return add_sphere("Small", u_segments=16, v_segments=8)
 
 
 def built_plan(mat):
@@ -264,8 +243,7 @@ def preset_row(request):
             # A transparent film shows the sphere's far wall through it (its own highlights, and
             # its thickness and lower normal in the AOVs), which the closure form of the front
             # surface does not hold: the film is compared over an empty base.
-            inputs = shader_node(obj.active_material).inputs
-            base = inputs.get("Base Shader") or inputs[SOCKET_NAMES["Base Shader"]]  # node group, OSL
+            base = M._socket(shader_node(obj.active_material).inputs, "Base Shader")  # group or OSL name
             assert [link.from_node.bl_idname for link in base.links] == ["ShaderNodeBsdfTransparent"]
             obj.active_material.node_tree.links.remove(base.links[0])
     passes = S.render_passes_osl() if backend == "osl" else S.render_passes()
