@@ -50,7 +50,7 @@ def test_every_plan_compiles_with_blenders_osl_compiler(tmp_path):
 
 def test_shader_reads_like_a_program_of_named_functions():
     src = shader_source(EffectPlan.full())
-    for step in ("vector schlick(", "vector fresnel_f0(", "void channel_block(", "void fold_interference(",
+    for step in ("vector schlick(", "vector fresnel_f0(", "void channel_block(", "void fold_basis(", "void fold_weights(", "void lobe_geometry(",
                  "vector correlated_normal(", "float thickness_at("):
         assert step in src, step
     assert "#if" not in src and "#define" not in src  # specialised per plan, not by the preprocessor

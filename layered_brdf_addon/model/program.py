@@ -172,13 +172,14 @@ def closure_tangent(ops, N, v, aniso):
 
 
 @shader_function
-def lobe_weight(ops, amplitude, mu, e, e_within, e_across, *, lobe):
-    """The closure whose value at its centre equals ``amplitude``, for a view at cosine
-    ``mu`` from its normal: its weight, alpha and anisotropy.  ``e``: the round exponent
-    (the geometric mean of the two) that Phong lobes take."""
+def lobe_shape(ops, mu, e, e_within, e_across, *, lobe):
+    """A closure about a normal seen at cosine ``mu`` whose lobe has the Phong exponents
+    ``e_within`` and ``e_across``: its alpha, anisotropy and the inverse of its value at
+    its centre (a weight that makes the centre's value an amplitude ``A`` is ``A`` times
+    that).  ``e``: the round exponent (the geometric mean of the two) that Phong lobes
+    take."""
     alpha, aniso, a_x, a_y = lobe_alphas(ops, e_within, e_across, mu)
-    weight = amplitude / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe)
-    return weight, alpha, aniso
+    return 1.0 / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe), alpha, aniso
 
 
 def closure_for(ops, lobe, name, normal, e, v, amplitudes):
@@ -207,20 +208,13 @@ def lobe_correlation(ops, p, q, delta2):
 
 
 @shader_function
-def fold_interference(ops, AR, AT, AI, eR, eT, eI, dRT, dRI, dTI):
-    """Non-negative least-squares fit of ``AR gR + AT gT + AI gI`` by ``wR gR + wT gT``: the
-    interference lobe of eq. 5 (``2 cos(2 Phi) sqrt(R T)``, of either sign) folded into the
-    reflected and transmitted lobes.  Cycles clamps a negative closure weight to 0, so
-    destructive interference cannot be a closure of its own; constructive interference is
-    folded too, which saves a closure per channel (docs/closure-decomposition.md has what
-    that costs in accuracy and saves in time).  ``d..``: squared angles between the lobes'
-    centres.
-
-    Gaussian lobes ``g = exp(-e theta^2 / 2)`` in the tangent plane; the normal equations
-    are solved in the basis of unit-norm lobes (``|g|^2 = 1/(2e)`` up to a common factor),
-    with a small ridge: equal lobes make them singular.  Where the 2x2 solution has a
-    negative weight, the better single-lobe fit is used.  Works per channel on triples.
-    """
+def fold_basis(ops, eR, eT, eI, dRT, dRI, dTI):
+    """The geometry of :func:`fold_interference`'s least-squares fit, which the lobes'
+    exponents and centres (``d..``: squared angles between them) fix whatever the
+    amplitudes: the norms ``u`` of Gaussian lobes ``g = exp(-e theta^2 / 2)`` in the
+    tangent plane (``|g|^2 = 1/(2e)`` up to a common factor), their normalised overlaps
+    ``rho`` and the determinant of the normal equations with a small ridge (equal lobes
+    make them singular).  Wavelengths that share lobe centres share this."""
     eR = ops.maximum(eR, 1e-3)  # exponent 0 has no finite Gaussian norm
     eT = ops.maximum(eT, 1e-3)
     eI = ops.maximum(eI, 1e-3)
@@ -230,13 +224,20 @@ def fold_interference(ops, AR, AT, AI, eR, eT, eI, dRT, dRI, dTI):
     rRT, one_minus = lobe_correlation(ops, eR, eT, dRT)
     rRI, _ = lobe_correlation(ops, eR, eI, dRI)
     rTI, _ = lobe_correlation(ops, eT, eI, dTI)
+    det = 2.0 * FOLD_RIDGE + FOLD_RIDGE * FOLD_RIDGE + one_minus  # (1 + ridge)^2 - rho^2
+    return dict(uR=uR, uT=uT, uI=uI, rRT=rRT, rRI=rRI, rTI=rTI, det=det)
+
+
+@shader_function
+def fold_weights(ops, AR, AT, AI, uR, uT, uI, rRT, rRI, rTI, det):
+    """Non-negative least-squares fit of ``AR gR + AT gT + AI gI`` by ``wR gR + wT gT`` in
+    the basis of :func:`fold_basis`: ``(wR, wT)``.  Where the 2x2 solution has a negative
+    weight, the better single-lobe fit is used."""
     aR, aT, aI = AR * uR, AT * uT, AI * uI  # coefficients on unit-norm lobes
     bR = aR + rRT * aT + rRI * aI
     bT = rRT * aR + aT + rTI * aI
-    ridge = 1e-4
-    det = 2.0 * ridge + ridge * ridge + one_minus  # (1 + ridge)^2 - rho^2
-    wR2 = ((1.0 + ridge) * bR - rRT * bT) / det
-    wT2 = ((1.0 + ridge) * bT - rRT * bR) / det
+    wR2 = ((1.0 + FOLD_RIDGE) * bR - rRT * bT) / det
+    wT2 = ((1.0 + FOLD_RIDGE) * bT - rRT * bR) / det
     both = ops.gt(wR2, 0.0) * ops.gt(wT2, 0.0)
     wR1 = ops.maximum(bR, 0.0)
     wT1 = ops.maximum(bT, 0.0)
@@ -244,6 +245,21 @@ def fold_interference(ops, AR, AT, AI, eR, eT, eI, dRT, dRI, dTI):
     wR = ops.select(both, wR2, ops.select(r_better, wR1, 0.0)) / uR
     wT = ops.select(both, wT2, ops.select(r_better, 0.0, wT1)) / uT
     return wR, wT
+
+
+def fold_interference(ops, AR, AT, AI, basis):
+    """The interference lobe of eq. 5 (``2 cos(2 Phi) sqrt(R T)``, of either sign) folded
+    into the reflected and transmitted lobes: ``(wR, wT)``, the non-negative least-squares
+    fit of ``AR gR + AT gT + AI gI`` by ``wR gR + wT gT`` (:func:`fold_basis`,
+    :func:`fold_weights`).  Cycles clamps a negative closure weight to 0, so destructive
+    interference cannot be a closure of its own; constructive interference is folded too,
+    which saves a closure per channel (docs/closure-decomposition.md has what that costs in
+    accuracy and saves in time).  Works per channel on triples."""
+    return fold_weights(ops, AR, AT, AI, *(basis[k] for k in FOLD_BASIS))
+
+
+FOLD_RIDGE = 1e-4
+FOLD_BASIS = ("uR", "uT", "uI", "rRT", "rRI", "rTI", "det")
 
 
 # ---------------------------------------------------------------- the channels
@@ -317,14 +333,11 @@ def exit_direction(ops, eta, cos_r, e1):
 
 
 @shader_function
-def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, interference=True):
-    """Amplitudes, centres and exponents of the three lobes of each channel (eqs. 3-11).
-    ``r1``, ``lam``: a scalar (one channel) or a triple (three)."""
-    f = fresnel_f0(ops, r1, r0)
-    F = schlick(ops, cos_v, f)
-    # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
-    AR_amp = ks * F * (e0 + 2.0) * INV_2PI
-    AR = AR_amp * cos_v
+def lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v):
+    """Where each channel's lobes lie and how wide they are (eqs. 4, 5, 10, 11): what the
+    index ``r1`` fixes, but not the wavelength's phase.  ``r1``: a scalar (one channel) or
+    a triple (three).  Wavelengths whose lobes share a closure share this
+    (:func:`lobe_amplitudes` gives each its own amplitudes on it)."""
     eta = r0 / r1
     k_o = 1.0 - eta * eta * (1.0 - cos_v * cos_v)
     s_o = ops.sqrt(k_o)  # <t_o, -n0>
@@ -349,30 +362,46 @@ def channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, *, int
     e1_across = e1 / (r1 * r1)
     e1p = e1_across * stretch
     e1_within = e1p * stretch
-    Tc = transmission_factor(ops, s_o, f)
-    F_l = schlick(ops, cos_ls, f)
-    AT_amp = ks * (1.0 - F_l) * Tc * (e1 + 2.0) * INV_2PI / (r1 * r1) * tail
-    AT = ops.select(through, AT_amp * cos_ls, 0.0)
     # Interference, eq. 5: sqrt(R T) of two Phong lobes is a lobe of exponent
-    # (e0 + e1')/2 about their weighted centre; phase from eq. 3 at that centre.
+    # (e0 + e1')/2 about their weighted centre, attenuated by their distance.
     w_sum = ops.maximum(e0 + e1p, 1e-6)
     c_Is = [ops.normalize(r_v * e0 + ls * e, r_v) for ls, e in zip(l_stars, channels(ops, e1p))]
     d_RT = spread(ops, gather(ops, [angle2(ops, r_v, ls) for ls in l_stars]), r1)
     atten = ops.exp(-(e0 * e1p) / (4.0 * w_sum) * d_RT)
     cos_ci = spread(ops, gather(ops, [ops.clamp(ops.dot(c, n0), 0.0, 1.0) for c in c_Is]), r1)
-    s_i = ops.sqrt(1.0 - eta * eta * (1.0 - cos_ci * cos_ci))
+    d_RI = spread(ops, gather(ops, [angle2(ops, r_v, c) for c in c_Is]), r1)
+    d_TI = spread(ops, gather(ops, [angle2(ops, ls, c) for ls, c in zip(l_stars, c_Is)]), r1)
+    out = dict(through=through, tail=tail, cos_ls=cos_ls, cos_ci=cos_ci, atten=atten, eT=e1p,
+               eI=0.5 * (e0 + e1p), d_RT=d_RT, d_RI=d_RI, d_TI=d_TI, eT_within=e1_within, eT_across=e1_across)
+    for k, ls in enumerate(l_stars):
+        out[f"l_star{k}"] = ls
+    return out
+
+
+@shader_function
+def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through, atten, *,
+                    interference=True):
+    """Values at their centres of the reflected, transmitted and interference lobes (eqs.
+    3-9) of one wavelength ``lam`` (or three: a triple), on lobes placed by
+    :func:`lobe_geometry` (``cos_ls``: cosine of the transmitted centre ``l*``, ``cos_ci``:
+    of the interference centre, ``atten``: the interference lobe's attenuation)."""
+    f = fresnel_f0(ops, r1, r0)
+    F = schlick(ops, cos_v, f)
+    # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
+    AR_amp = ks * F * (e0 + 2.0) * INV_2PI
+    eta = r0 / r1
+    s_o = ops.sqrt(1.0 - eta * eta * (1.0 - cos_v * cos_v))  # <t_o, -n0>
+    Tc = transmission_factor(ops, s_o, f)
+    F_l = schlick(ops, cos_ls, f)
+    AT_amp = ks * (1.0 - F_l) * Tc * (e1 + 2.0) * INV_2PI / (r1 * r1) * tail
+    AT = ops.select(through, AT_amp * cos_ls, 0.0)
     if interference:
+        s_i = ops.sqrt(1.0 - eta * eta * (1.0 - cos_ci * cos_ci))
         phase = (math.pi / lam) * r1 * d * (s_i + s_o)  # eq. 3
         AI = ops.select(through, 2.0 * ops.cos(2.0 * phase) * ops.sqrt(AR_amp * AT_amp) * atten * cos_ci, 0.0)
     else:
         AI = 0.0  # averaged over the band: cos(2 Phi) has mean 0
-    d_RI = spread(ops, gather(ops, [angle2(ops, r_v, c) for c in c_Is]), r1)
-    d_TI = spread(ops, gather(ops, [angle2(ops, ls, c) for ls, c in zip(l_stars, c_Is)]), r1)
-    out = dict(AR=AR, AT=AT, AI=AI, eT=e1p, eI=0.5 * (e0 + e1p), d_RT=d_RT, d_RI=d_RI, d_TI=d_TI,
-               eT_within=e1_within, eT_across=e1_across)
-    for k, ls in enumerate(l_stars):
-        out[f"l_star{k}"] = ls
-    return out
+    return AR_amp * cos_v, AT, AI
 
 
 @shader_function
@@ -389,68 +418,74 @@ def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
     return ops.components(colour)
 
 
-def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe="beckmann", interference=True):
-    """The channels' lobes (eqs. 3-11), the interference folded into the other two, and the
-    normals, exponents, alphas and weights of their transmitted closures.  A lobe centred
-    on the direction c is a closure about normalize(v + c).  ``r1``, ``lam``: a scalar (one
-    wavelength) or a triple (the RGB channels).  ``N_T0``..: the closure normals, one per
-    channel."""
+def channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, lobe="beckmann", interference=True):
+    """The lobes of one channel or three (``r1`` a scalar or a triple) as closures would
+    place them: :func:`lobe_geometry`, the fold's basis, and per channel the transmitted
+    closure's normal ``N_T``, tangent ``U_T``, exponent, alpha, anisotropy and inverse
+    peak (a lobe centred on the direction c is a closure about normalize(v + c))."""
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     r_v = n0 * (2.0 * ops.dot(v, n0)) - v
-    t = channel_terms(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, cos_v, r_v, interference=interference)
+    geo = lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v)
+    out = {k: geo[k] for k in LOBE_PLACEMENT}
+    out["cos_v"] = cos_v
     if interference:
-        AR, AT = fold_interference(ops, t["AR"], t["AT"], t["AI"], e0, t["eT"], t["eI"], t["d_RT"], t["d_RI"],
-                                   t["d_TI"])
-    else:  # no interference lobe to fold
-        AR, AT = t["AR"], t["AT"]
+        out.update(fold_basis(ops, e0, geo["eT"], geo["eI"], geo["d_RT"], geo["d_RI"], geo["d_TI"]))
     n = 3 if ops.is_vector(r1) else 1
-    normals = [ops.normalize(v + t[f"l_star{k}"], n0) for k in range(n)]
+    normals = [ops.normalize(v + geo[f"l_star{k}"], n0) for k in range(n)]
     mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
-    w, alpha, aniso = lobe_weight(ops, AT, mu, t["eT"], t["eT_within"], t["eT_across"], lobe=lobe)
+    inv_peak, alpha, aniso = lobe_shape(ops, mu, geo["eT"], geo["eT_within"], geo["eT_across"], lobe=lobe)
     frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
-    out = dict(AR=AR, e_T=t["eT"], alpha_T=alpha, w_T=w, aniso_T=gather(ops, [f[1] for f in frames]))
+    out.update(e_T=geo["eT"], alpha_T=alpha, inv_peak_T=inv_peak, aniso_T=gather(ops, [f[1] for f in frames]))
     out.update({f"N_T{k}": N for k, N in enumerate(normals)})
     out.update({f"U_T{k}": f[0] for k, f in enumerate(frames)})
     return out
 
 
-def spectral_step(ops, acc_R, acc_D, acc_T0, acc_T1, acc_T2, lead_T0, lead_T1, lead_T2, lead_eT, lead_aT,
-                  lead_nT, r1, lam, m, in0, in1, in2, is0, is1, is2, e0, e1, ks, kd, r0, n0, n1, v, d,
-                  lobe="beckmann", diffuse=True, interference=True):
-    """One wavelength of the spectral mode, chained: it takes the running sums and returns
-    them updated, so a shader holds only the sums, whatever the number of wavelengths.
+LOBE_PLACEMENT = ("cos_ls", "cos_ci", "tail", "through", "atten")  # what lobe_amplitudes takes from the lobes
 
-    ``m``: the wavelength's row of the spectrum-to-Rec.709 matrix (a vector); ``in_g``: 1
-    if the wavelength belongs to lobe group ``g``; ``is_g``: 1 if it leads group ``g``
-    (its centre and exponent are the group's).  The lead exponents, alphas and anisotropies
-    of the three groups travel packed in vectors.
-    """
+
+def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, lobe="beckmann", interference=True):
+    """The channels' lobes (eqs. 3-11), the interference folded into the other two, and the
+    normals, exponents, alphas and weights of their transmitted closures (``N_T0``.., one
+    per lobe direction).  ``r1``, ``lam``: a scalar (one wavelength) or a triple (the RGB
+    channels); ``r1_lobes``: the index that places the lobes, where the channels share
+    them (equal indices), else ``r1``."""
+    lobes = channel_lobes(ops, r1 if r1_lobes is None else r1_lobes, e0, e1, r0, n0, n1, v, lobe, interference)
+    AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, lobes["cos_v"],
+                                 *(spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT), interference=interference)
+    if interference:
+        AR, AT = fold_interference(ops, AR, AT, AI, {k: spread(ops, lobes[k], r1) for k in FOLD_BASIS})
+    out = dict(lobes, AR=AR, w_T=AT * spread(ops, lobes["inv_peak_T"], r1))
+    return {k: out[k] for k in ["AR", "w_T", "e_T", "alpha_T", "aniso_T"] + [k for k in out if k[:3] in ("N_T", "U_T")]}
+
+
+def spectral_step(ops, acc_R, acc_D, acc_T, r1, lam, m, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through,
+                  atten, uR=None, uT=None, uI=None, rRT=None, rRI=None, rTI=None, det=None,
+                  diffuse=True, interference=True):
+    """One wavelength of the spectral mode, chained: it takes the running sums of the
+    reflected, diffuse and its lobe group's transmitted light and returns them updated, so
+    a shader holds only the sums, whatever the number of wavelengths.  The lobes are its
+    group's (:func:`channel_lobes` of the group's lead wavelength, computed once); only
+    the amplitudes are the wavelength's own.  ``m``: the wavelength's row of the
+    spectrum-to-Rec.709 matrix (a vector)."""
     out = {}
-    # Everything this step computes waits for the whole previous state, so that a node
-    # backend evaluates the steps one after the other and only the running state stays
-    # alive, whatever the number of wavelengths (Cycles' SVM has a stack of 255 floats).
-    state = (acc_R, acc_D, acc_T0, acc_T1, acc_T2, lead_T0, lead_T1, lead_T2, lead_eT, lead_aT, lead_nT)
-    d = ops.after(state, d)
-    r1 = ops.after(state, r1)  # everything that depends on the index waits too
+    # Everything this step computes depends on the index, which waits for the whole
+    # previous state, so that a node backend evaluates the steps one after the other and
+    # only the running state stays alive, whatever the number of wavelengths (Cycles' SVM
+    # has a stack of 255 floats).
+    r1 = ops.after((acc_R, acc_D, acc_T), r1)
     if diffuse and not interference:
         out["acc_D"] = acc_D + m  # rho_d averaged over the band: 1
     elif diffuse:
         out["acc_D"] = acc_D + m * diffuse_rho(ops, r1, r0, lam, d)
     else:
         out["acc_D"] = acc_D
-    b = channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, lobe, interference)
-    out["acc_R"] = acc_R + m * b["AR"]
-    e_parts, a_parts, n_parts = [], [], []
-    for g, (acc, lead, member, is_lead) in enumerate(zip((acc_T0, acc_T1, acc_T2), (lead_T0, lead_T1, lead_T2),
-                                                         (in0, in1, in2), (is0, is1, is2))):
-        out[f"acc_T{g}"] = acc + m * (b["w_T"] * member)
-        out[f"lead_T{g}"] = ops.select_vec(is_lead, b["N_T0"], lead)
-        e_parts.append(ops.select(is_lead, b["e_T"], ops.dot(lead_eT, _UNIT[g])))
-        a_parts.append(ops.select(is_lead, b["alpha_T"], ops.dot(lead_aT, _UNIT[g])))
-        n_parts.append(ops.select(is_lead, b["aniso_T"], ops.dot(lead_nT, _UNIT[g])))
-    out["lead_eT"] = ops.combine(*e_parts)
-    out["lead_aT"] = ops.combine(*a_parts)
-    out["lead_nT"] = ops.combine(*n_parts)
+    AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through, atten,
+                                 interference=interference)
+    if interference:
+        AR, AT = fold_weights(ops, AR, AT, AI, uR, uT, uI, rRT, rRI, rTI, det)
+    out["acc_R"] = acc_R + m * AR
+    out["acc_T"] = acc_T + m * AT
     return out
 
 
@@ -498,44 +533,55 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     """Spectral mode: the channel program at N wavelengths (``r1(lambda)`` from the Cauchy
     fit through the three indices, a linear map), summed into RGB closures with baked
     CIE 1931 / D65 weights (model/spectral_tables.py).  Transmitted lobes keep a bounded
-    number of directions: each wavelength joins the lobe of the nearest of
-    the three RGB wavelengths (three directions with dispersion, one without), whose
-    centre and exponent are those of the group's wavelength nearest to it.
+    number of directions: each wavelength joins the lobe group of the nearest of the three
+    RGB wavelengths (three groups with dispersion, one without), whose lobes are placed
+    once, by the group's wavelength nearest to it; each wavelength adds its own amplitudes
+    on them.
     """
     from .spectral_tables import tables
 
     t = tables(plan.spectral)
     lams, K, M = t["wavelengths"], t["cauchy"], t["rgb"]
     groups, leads = spectral_groups(lams, plan.dispersion)
+
+    def index(j):
+        k = K[j]
+        return ops.clamp(k[0] * P["r1"][0] + k[1] * P["r1"][1] + k[2] * P["r1"][2], 0.1, 5.0)
+
+    order = sorted(leads)
+    lead_r1 = gather(ops, [index(leads[g]) for g in order])
+    lobes = ops.call("lobe groups", channel_lobes,
+                     dict(r1=lead_r1, e0=P["e0"], e1=P["e1"], r0=P["r0"], n0=n0, n1=n1, v=v),
+                     lobe=plan.lobe, interference=plan.interference)
+    per_group = [k for k in LOBE_PLACEMENT + (FOLD_BASIS if plan.interference else ())]
+    split = {k: channels(ops, spread(ops, lobes[k], lead_r1)) for k in per_group}
     zero = (0.0, 0.0, 0.0)
-    state = dict(acc_R=zero, acc_D=zero, acc_T0=zero, acc_T1=zero, acc_T2=zero, lead_T0=n0, lead_T1=n0,
-                 lead_T2=n0, lead_eT=(1.0, 1.0, 1.0), lead_aT=(1.0, 1.0, 1.0), lead_nT=zero)
-    for j, (k, lam, m) in enumerate(zip(K, lams, M)):
-        r1 = ops.clamp(k[0] * P["r1"][0] + k[1] * P["r1"][1] + k[2] * P["r1"][2], 0.1, 5.0)
-        member = [1.0 if groups[j] == g else 0.0 for g in range(3)]
-        is_lead = [1.0 if leads.get(g) == j else 0.0 for g in range(3)]
+    acc_R, acc_D, acc_T = zero, zero, {g: zero for g in order}
+    for j, (lam, m) in enumerate(zip(lams, M)):
+        g = groups[j]
+        slot = order.index(g)
         state = ops.call("spectral step", spectral_step,
-                         dict(state, r1=r1, lam=float(lam), m=tuple(float(x) for x in m),
-                              in0=member[0], in1=member[1], in2=member[2],
-                              is0=is_lead[0], is1=is_lead[1], is2=is_lead[2],
-                              e0=P["e0"], e1=P["e1"], ks=P["ks"], kd=P["kd"], r0=P["r0"], n0=n0, n1=n1, v=v, d=d),
-                         lobe=plan.lobe, diffuse=plan.diffuse, interference=plan.interference)
+                         dict(acc_R=acc_R, acc_D=acc_D, acc_T=acc_T[g], r1=index(j), lam=float(lam),
+                              m=tuple(float(x) for x in m), e0=P["e0"], e1=P["e1"], ks=P["ks"], r0=P["r0"], d=d,
+                              cos_v=lobes["cos_v"], **{k: split[k][slot] for k in per_group}),
+                         diffuse=plan.diffuse, interference=plan.interference)
+        acc_R, acc_D, acc_T[g] = state["acc_R"], state["acc_D"], state["acc_T"]
     res = ShadingResult()
 
     def rgb(vec):
         return tuple(ops.maximum(ops.dot(vec, _UNIT[c]), 0.0) for c in range(3))
 
     if plan.diffuse:
-        res.diffuse = tuple(P["kd"] * b * x for b, x in zip(P["base"], rgb(state["acc_D"])))
+        res.diffuse = tuple(P["kd"] * b * x for b, x in zip(P["base"], rgb(acc_D)))
     if not plan.specular:
         return res
-    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(state["acc_R"])))
-    weights = merged_group_weights(ops, [state[f"acc_T{g}"] for g in sorted(leads)])
-    for g, w in zip(sorted(leads), weights):
-        N = state[f"lead_T{g}"]
-        tangent, aniso = closure_tangent(ops, N, v, ops.dot(state["lead_nT"], _UNIT[g]))
-        res.glossy.append(Closure(f"transmit_{g}", N, ops.dot(state["lead_eT"], _UNIT[g]),
-                                  ops.dot(state["lead_aT"], _UNIT[g]), w, aniso, tangent))
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(acc_R)))
+    inv_peak = channels(ops, lobes["inv_peak_T"])
+    weights = merged_group_weights(ops, [acc_T[g] * inv_peak[slot] for slot, g in enumerate(order)])
+    e, alpha, aniso = (channels(ops, lobes[k]) for k in ("e_T", "alpha_T", "aniso_T"))
+    for slot, (g, w) in enumerate(zip(order, weights)):
+        res.glossy.append(Closure(f"transmit_{g}", lobes[f"N_T{slot}"], e[slot], alpha[slot], w, aniso[slot],
+                                  lobes[f"U_T{slot}"]))
     return res
 
 
@@ -553,29 +599,24 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
         res.diffuse = diffuse_colour(ops, P, d, wavelengths)
     if not plan.specular:
         return res
-    common = dict(e0=P["e0"], e1=P["e1"], ks=P["ks"], r0=P["r0"], n0=n0, n1=n1, v=v, d=d)
-    if plan.dispersion:
-        # Each channel's lobes have their own centres and exponents: the three channels as
-        # one triple, a closure per channel and lobe.
-        b = ops.call("channels", channel_block,
-                     dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), **common),
-                     lobe=plan.lobe)
-        res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
-        e, alpha, w, aniso = (ops.components(b[f"{k}_T"]) for k in ("e", "alpha", "w", "aniso"))
-        for c in range(3):
-            weight = tuple(w[c] if k == c else 0.0 for k in range(3))
-            res.glossy.append(Closure(f"transmit_{'rgb'[c]}", b[f"N_T{c}"], e[c], alpha[c], weight,
-                                      aniso[c], b[f"U_T{c}"]))
+    inputs = dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), e0=P["e0"], e1=P["e1"],
+                  ks=P["ks"], r0=P["r0"], n0=n0, n1=n1, v=v, d=d)
+    if not plan.dispersion:
+        # Equal indices: every channel's lobes have the same centre and exponent, placed
+        # once (by green's index); each channel keeps its own amplitudes.
+        inputs["r1_lobes"] = P["r1"][1]
+    b = ops.call("channels" if plan.dispersion else "channels, shared lobes", channel_block, inputs, lobe=plan.lobe)
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
+    w = ops.components(b["w_T"])
+    if not plan.dispersion:
+        res.glossy.append(Closure("transmit", b["N_T0"], b["e_T"], b["alpha_T"], w, b["aniso_T"], b["U_T0"]))
         return res
-    # Equal indices: every channel's lobe has the same centre and exponent (green's are
-    # used); each channel keeps the weight computed from its own wavelength.  One scalar
-    # block per channel: a shader compiler merges what the channels share.
-    blocks = [ops.call("channel", channel_block, dict(r1=r1, lam=float(lam), **common), lobe=plan.lobe)
-              for r1, lam in zip(P["r1"], wavelengths)]
-    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, tuple(b["AR"] for b in blocks)))
-    g = blocks[1]
-    res.glossy.append(Closure("transmit", g["N_T0"], g["e_T"], g["alpha_T"], tuple(b["w_T"] for b in blocks),
-                              g["aniso_T"], g["U_T0"]))
+    # Each channel's lobes have their own centres and exponents: a closure per channel.
+    e, alpha, aniso = (ops.components(b[f"{k}_T"]) for k in ("e", "alpha", "aniso"))
+    for c in range(3):
+        weight = tuple(w[c] if k == c else 0.0 for k in range(3))
+        res.glossy.append(Closure(f"transmit_{'rgb'[c]}", b[f"N_T{c}"], e[c], alpha[c], weight,
+                                  aniso[c], b[f"U_T{c}"]))
     return res
 
 
