@@ -21,7 +21,8 @@ def accuracy_tables() -> str:
     for name, lv in d["accuracy"]["closure_levels"].items():
         g, r = lv["vs_ground_truth"]["all"], lv["vs_rgb_exact"]["all"]
         t = thr.get(name, {}).get("specular", float("nan"))
-        out.append(f"| {name} | {g['mean']:.2f} / {g['p95']:.2f} | {r['mean']:.2f} / {r['p95']:.2f} | {t:,.0f} |")
+        rate = f"{t:,.0f}" if t == t else ""  # no throughput measured: NaN
+        out.append(f"| {name} | {g['mean']:.2f} / {g['p95']:.2f} | {r['mean']:.2f} / {r['p95']:.2f} | {rate} |")
     return "\n".join(out)
 
 
