@@ -94,6 +94,49 @@ def stock_variants() -> list[Variant]:
     return out
 
 
+def closure_floor_material(label: str, glossy: int):
+    """The closures of a layered material and no arithmetic: a Diffuse BSDF and ``glossy``
+    Beckmann Glossy BSDFs (anisotropic, tangent from the Tangent node, constant colours and
+    roughness), added.  What Cycles spends on the closures alone, the floor of any node
+    group that builds them."""
+    import bpy
+
+    mat = bpy.data.materials.new(label)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    tangent = nt.nodes.new("ShaderNodeTangent")
+    total = nt.nodes.new(DIFFUSE).outputs[0]
+    for k in range(glossy):
+        g = nt.nodes.new(GLOSSY)
+        g.distribution = "BECKMANN"
+        g.inputs["Color"].default_value = (0.3 + 0.2 * (k % 3), 0.5, 0.8 - 0.2 * (k % 3), 1.0)
+        g.inputs["Roughness"].default_value = 0.15 + 0.05 * k
+        g.inputs["Anisotropy"].default_value = 0.5
+        nt.links.new(tangent.outputs["Tangent"], g.inputs["Tangent"])
+        add = nt.nodes.new("ShaderNodeAddShader")
+        nt.links.new(total, add.inputs[0])
+        nt.links.new(g.outputs[0], add.inputs[1])
+        total = add.outputs[0]
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(total, out.inputs["Surface"])
+    return mat
+
+
+#: The closure sets of the layered material: with dispersion (a reflected and three
+#: transmitted lobes) and with equal indices (one of each), each with the diffuse part.
+CLOSURE_FLOORS = (("closures alone: diffuse + 4 glossy (dispersion)", 4),
+                  ("closures alone: diffuse + 2 glossy (equal indices)", 2))
+
+
+def floor_variants() -> list[Variant]:
+    out = []
+    for label, glossy in CLOSURE_FLOORS:
+        mat = closure_floor_material(label, glossy)
+        mat.use_fake_user = True
+        out.append(Variant(label, material=mat))
+    return out
+
+
 def layered_variant(obj, preset_name: str, backend: str, accuracy: str) -> Variant:
     """The layered material of a preset, built by the add-on on ``obj`` and then kept aside."""
     from layered_brdf_addon.blender.material import apply_layered_material
@@ -414,7 +457,7 @@ def main(argv=None):
     args = parse_args(argv)
     t0 = time.perf_counter()
     obj = build_scene()
-    variants = stock_variants() + layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET,
+    variants = stock_variants() + floor_variants() + layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET,
                                                    args.spectral_modes)
     d = dict(machine=machine_info(), seconds=0.0,
              settings=dict(size=SIZE, subdiv=SUBDIV_LEVELS, hdri=hdri_path().name, sun=SUN_STRENGTH,

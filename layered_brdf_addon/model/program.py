@@ -312,7 +312,8 @@ def exit_direction(ops, eta, cos_r, e1):
     ``1 - F ~ 5 u``): largest at ``u^2 = (sqrt(delta0^2 + 4 / e1) - delta0) / (2 b)``.
     Scalars or channel triples."""
     inv_eta = 1.0 / eta
-    k_l = 1.0 - inv_eta * inv_eta * (1.0 - cos_r * cos_r)
+    inv_eta2 = inv_eta * inv_eta
+    k_l = (1.0 - inv_eta2) + inv_eta2 * (cos_r * cos_r)
     leaves = ops.gt(k_l, 0.0) * ops.gt(cos_r, 0.0)
     sin_r = ops.sqrt(ops.maximum(1.0 - cos_r * cos_r, 0.0))
     cos_c = ops.sqrt(ops.maximum(1.0 - eta * eta, 1e-6))
@@ -333,13 +334,31 @@ def exit_direction(ops, eta, cos_r, e1):
 
 
 @shader_function
+def interference_centre(ops, e0, e1p, w_sum, e01, d_RT, cos_v, cos_l):
+    """The interference lobe's centre ``c_I = (e0 r_v + e1' l*) / L`` (eq. 5: the weighted
+    centre of the reflected and transmitted lobes) without forming it: its cosine to
+    ``n0`` and its squared chords ``d_RI``, ``d_TI`` to ``r_v`` and ``l*``, from the chord
+    ``d_RT = 2 - 2 <r_v, l*>`` and the centres' cosines ``cos_v``, ``cos_l``.  Exact:
+    ``L^2 = e0^2 + e1'^2 + 2 e0 e1' <r_v, l*> = (e0 + e1')^2 - e0 e1' d_RT``, at least
+    ``(e0 - e1')^2``; ``w_sum``: ``e0 + e1'`` floored, so that two zero exponents give a
+    zero lobe, not a division by zero; ``e01 = e0 e1'``."""
+    inv_L = 1.0 / ops.maximum(ops.sqrt(w_sum * w_sum - e01 * d_RT), 1e-6)
+    c = 1.0 - 0.5 * d_RT  # <r_v, l*>
+    cos_ci = ops.clamp((e0 * cos_v + e1p * cos_l) * inv_L, 0.0, 1.0)
+    d_RI = ops.maximum(2.0 - 2.0 * (e0 + e1p * c) * inv_L, 0.0)
+    d_TI = ops.maximum(2.0 - 2.0 * (e1p + e0 * c) * inv_L, 0.0)
+    return cos_ci, d_RI, d_TI
+
+
+@shader_function
 def lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v):
     """Where each channel's lobes lie and how wide they are (eqs. 4, 5, 10, 11): what the
     index ``r1`` fixes, but not the wavelength's phase.  ``r1``: a scalar (one channel) or
     a triple (three).  Wavelengths whose lobes share a closure share this
     (:func:`lobe_amplitudes` gives each its own amplitudes on it)."""
     eta = r0 / r1
-    k_o = 1.0 - eta * eta * (1.0 - cos_v * cos_v)
+    eta2 = eta * eta
+    k_o = (1.0 - eta2) + eta2 * (cos_v * cos_v)
     s_o = ops.sqrt(k_o)  # <t_o, -n0>
     entering = ops.gt(k_o, 0.0) * ops.gt(cos_v, 0.0)
     # The light direction l* whose path through the layer leaves along v (eqs. 10, 11):
@@ -365,12 +384,11 @@ def lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v):
     # Interference, eq. 5: sqrt(R T) of two Phong lobes is a lobe of exponent
     # (e0 + e1')/2 about their weighted centre, attenuated by their distance.
     w_sum = ops.maximum(e0 + e1p, 1e-6)
-    c_Is = [ops.normalize(r_v * e0 + ls * e, r_v) for ls, e in zip(l_stars, channels(ops, e1p))]
     d_RT = spread(ops, gather(ops, [angle2(ops, r_v, ls) for ls in l_stars]), r1)
-    atten = ops.exp(-(e0 * e1p) / (4.0 * w_sum) * d_RT)
-    cos_ci = spread(ops, gather(ops, [ops.clamp(ops.dot(c, n0), 0.0, 1.0) for c in c_Is]), r1)
-    d_RI = spread(ops, gather(ops, [angle2(ops, r_v, c) for c in c_Is]), r1)
-    d_TI = spread(ops, gather(ops, [angle2(ops, ls, c) for ls, c in zip(l_stars, c_Is)]), r1)
+    e01 = e0 * e1p
+    atten = ops.exp(e01 * d_RT * (-0.25) / w_sum)
+    cos_ci, d_RI, d_TI = interference_centre(ops, e0, e1p, w_sum, e01, d_RT, cos_v,
+                                             ops.select(through, cos_ls, cos_v))
     out = dict(through=through, tail=tail, cos_ls=cos_ls, cos_ci=cos_ci, atten=atten, eT=e1p,
                eI=0.5 * (e0 + e1p), d_RT=d_RT, d_RI=d_RI, d_TI=d_TI, eT_within=e1_within, eT_across=e1_across)
     for k, ls in enumerate(l_stars):
@@ -388,17 +406,20 @@ def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail
     f = fresnel_f0(ops, r1, r0)
     F = schlick(ops, cos_v, f)
     # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
-    AR_amp = ks * F * (e0 + 2.0) * INV_2PI
+    # Products written with the material's constants together, so that a shader compiler
+    # folds them once per material.
+    AR_amp = F * (ks * (e0 + 2.0) * INV_2PI)
     eta = r0 / r1
-    s_o = ops.sqrt(1.0 - eta * eta * (1.0 - cos_v * cos_v))  # <t_o, -n0>
+    eta2 = eta * eta
+    s_o = ops.sqrt((1.0 - eta2) + eta2 * (cos_v * cos_v))  # <t_o, -n0>
     Tc = transmission_factor(ops, s_o, f)
     F_l = schlick(ops, cos_ls, f)
-    AT_amp = ks * (1.0 - F_l) * Tc * (e1 + 2.0) * INV_2PI / (r1 * r1) * tail
+    AT_amp = (1.0 - F_l) * Tc * tail * (ks * (e1 + 2.0) * INV_2PI / (r1 * r1))
     AT = ops.select(through, AT_amp * cos_ls, 0.0)
     if interference:
-        s_i = ops.sqrt(1.0 - eta * eta * (1.0 - cos_ci * cos_ci))
-        phase = (math.pi / lam) * r1 * d * (s_i + s_o)  # eq. 3
-        AI = ops.select(through, 2.0 * ops.cos(2.0 * phase) * ops.sqrt(AR_amp * AT_amp) * atten * cos_ci, 0.0)
+        s_i = ops.sqrt((1.0 - eta2) + eta2 * (cos_ci * cos_ci))
+        phase2 = (2.0 * math.pi / lam) * r1 * d * (s_i + s_o)  # twice the phase of eq. 3
+        AI = ops.select(through, ops.cos(phase2) * ops.sqrt(AR_amp * AT_amp) * (atten * cos_ci) * 2.0, 0.0)
     else:
         AI = 0.0  # averaged over the band: cos(2 Phi) has mean 0
     return AR_amp * cos_v, AT, AI
