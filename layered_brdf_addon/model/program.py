@@ -31,6 +31,7 @@ MIN_COS = 0.05  # lower bound of the view cosine used to stretch Beckmann lobes
 ANISO_FLOOR = 0.5  # the stretch 1/mu of a lobe across the view's plane stops at mu = alpha / 2
 GRADIENT_STEP = 1.0e-3  # forward-difference step (world units) of the thickness gradient
 D_LIMIT = 1.0e6  # largest thickness (nm): the range of d_min and d_max
+FOLD_RIDGE = 1e-4  # ridge of the fold's 2x2 normal equations (equal lobes make them singular)
 
 
 def shader_function(fn):
@@ -258,7 +259,6 @@ def fold_interference(ops, AR, AT, AI, basis):
     return fold_weights(ops, AR, AT, AI, *(basis[k] for k in FOLD_BASIS))
 
 
-FOLD_RIDGE = 1e-4
 FOLD_BASIS = ("uR", "uT", "uI", "rRT", "rRI", "rTI", "det")
 
 
