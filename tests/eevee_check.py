@@ -1,8 +1,10 @@
 """Render one sphere carrying the add-on's node-group material with Cycles, then with EEVEE.
 
 Run as a subprocess by tests/test_ui.py (EEVEE needs a GL context: headless, EGL with
-Mesa's software rasteriser).  Usage: ``python tests/eevee_check.py OUT.npz``; writes the
-two beauty passes (rows top to bottom) and the EEVEE render time.
+Mesa's software rasteriser).  Usage: ``python tests/eevee_check.py OUT.npz [ACCURACY]``;
+writes the two beauty passes (rows top to bottom) and the EEVEE render time.  With an
+accuracy mode (``spectral32``...) the material is the preset in that mode, applied through
+``apply_layered_material``; without, the panel's preset operator applies it in RGB.
 """
 from __future__ import annotations
 
@@ -32,7 +34,7 @@ def configure_eevee(scene) -> None:
     scene.render.use_motion_blur = False
 
 
-def main(out: str) -> None:
+def main(out: str, accuracy: str | None = None) -> None:
     sys.path.insert(0, str(ROOT))
     import bpy
 
@@ -45,7 +47,13 @@ def main(out: str) -> None:
     cam = S.camera_for(1, HEIGHT)
     [sphere] = S.build_scene(S.SceneSpec(camera=cam, sun=Sun(direction=SUN_DIRECTION, strength=1.0)))
     bpy.context.view_layer.objects.active = sphere
-    bpy.ops.layered_brdf.load_preset(preset=PRESET)
+    if accuracy is None:
+        bpy.ops.layered_brdf.load_preset(preset=PRESET)
+    else:
+        from layered_brdf_addon.blender.material import apply_layered_material
+        from layered_brdf_addon.model import preset
+
+        apply_layered_material(sphere, preset(PRESET).replace(accuracy=accuracy), "nodes")
     cycles = S.render_passes()
     configure_eevee(bpy.context.scene)
     t0 = time.perf_counter()
@@ -56,4 +64,4 @@ def main(out: str) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(sys.argv[1], *sys.argv[2:3])

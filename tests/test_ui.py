@@ -485,22 +485,44 @@ def test_node_group_is_an_asset_with_a_rendered_preview():
 
 
 # --- EEVEE -------------------------------------------------------------------------------------
-@pytest.mark.slow
-def test_eevee_renders_the_node_group_with_the_highlight_where_cycles_has_it(tmp_path):
+def eevee_check(tmp_path, *args):
+    """Cycles' and EEVEE's beauty passes of tests/eevee_check.py, and EEVEE's render time."""
     out = tmp_path / "eevee.npz"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.run([sys.executable, str(ROOT / "tests" / "eevee_check.py"), str(out)], cwd=ROOT, env=env,
-                          capture_output=True, text=True, timeout=300)
+    proc = subprocess.run([sys.executable, str(ROOT / "tests" / "eevee_check.py"), str(out), *args], cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0 and out.exists(), (
         "EEVEE could not render (it needs EGL and Mesa's software GL: see .ci/run):\n" + proc.stderr[-3000:])
     r = np.load(out)
-    cycles, eevee = r["cycles"], r["eevee"]
-    print(f"EEVEE render: {float(r['eevee_seconds']):.1f} s")
+    return r["cycles"], r["eevee"], float(r["eevee_seconds"])
+
+
+def assert_highlights_meet(cycles, eevee):
+    """Both renders have finite light and their brightest pixel within 2 px of each other."""
     assert np.all(np.isfinite(eevee)) and eevee.max() > 0.0
     lum_c, lum_e = cycles.sum(-1), eevee.sum(-1)
     peak_c = np.array(np.unravel_index(lum_c.argmax(), lum_c.shape))
     peak_e = np.array(np.unravel_index(lum_e.argmax(), lum_e.shape))
     assert np.abs(peak_c - peak_e).max() <= 2, (peak_c, peak_e)
+    return lum_c, lum_e, tuple(peak_e)
+
+
+@pytest.mark.slow
+def test_eevee_renders_the_node_group_with_the_highlight_where_cycles_has_it(tmp_path):
+    cycles, eevee, seconds = eevee_check(tmp_path)
+    print(f"EEVEE render: {seconds:.1f} s")
+    lum_c, lum_e, peak_e = assert_highlights_meet(cycles, eevee)
     # The highlight stands out in both: its peak is several times the sphere's median.
     sphere = lum_c > 0.0
-    assert lum_e[tuple(peak_e)] > 4.0 * np.median(lum_e[sphere])
+    assert lum_e[peak_e] > 4.0 * np.median(lum_e[sphere])
+
+
+@pytest.mark.slow
+def test_eevee_links_the_largest_accuracy_mode(tmp_path):
+    """The spectral 32 group (the most nodes of any mode) compiles in EEVEE: no magenta
+    "shader failed" pixels, finite light, and its highlight where Cycles has it."""
+    cycles, eevee, seconds = eevee_check(tmp_path, "spectral32")
+    print(f"EEVEE render, spectral 32: {seconds:.1f} s")
+    magenta = (np.abs(eevee[..., 0] - 1.0) < 0.1) & (eevee[..., 1] < 0.1) & (np.abs(eevee[..., 2] - 1.0) < 0.1)
+    assert not magenta.any()
+    assert_highlights_meet(cycles, eevee)
