@@ -86,12 +86,13 @@ def stock_variants() -> list[Variant]:
     """Blender's BSDFs, the reference first."""
     specs = ((REFERENCE, PRINCIPLED, thin_film_inputs(THIN_FILM_NM, THIN_FILM_IOR)),
              ("Principled BSDF", PRINCIPLED, {}), ("Glossy BSDF", GLOSSY, {}), ("Diffuse BSDF", DIFFUSE, {}))
-    out = []
-    for label, bsdf, inputs in specs:
-        mat = stock_material(label, bsdf, inputs)
-        mat.use_fake_user = True
-        out.append(Variant(label, material=mat))
-    return out
+    return [kept_variant(label, stock_material(label, bsdf, inputs)) for label, bsdf, inputs in specs]
+
+
+def kept_variant(label: str, mat) -> Variant:
+    """A stock variant of the material ``mat``, kept in the file while other materials are in use."""
+    mat.use_fake_user = True
+    return Variant(label, material=mat)
 
 
 def closure_floor_material(label: str, glossy: int):
@@ -129,12 +130,7 @@ CLOSURE_FLOORS = (("closures alone: diffuse + 4 glossy (dispersion)", 4),
 
 
 def floor_variants() -> list[Variant]:
-    out = []
-    for label, glossy in CLOSURE_FLOORS:
-        mat = closure_floor_material(label, glossy)
-        mat.use_fake_user = True
-        out.append(Variant(label, material=mat))
-    return out
+    return [kept_variant(label, closure_floor_material(label, glossy)) for label, glossy in CLOSURE_FLOORS]
 
 
 def layered_variant(obj, preset_name: str, backend: str, accuracy: str) -> Variant:
@@ -280,9 +276,9 @@ def magenta_fraction(scene=None) -> float:
     mask = px[:, 3] > 0.5 if scene.render.film_transparent else np.ones(len(px), bool)
     if not mask.any():
         return 0.0
-    rgb = px[mask, :3]
-    magenta = np.all(np.abs(rgb - np.array([1.0, 0.0, 1.0])) < MAGENTA_TOL, axis=1)
-    return float(magenta.mean())
+    from layered_brdf_addon.blender.scene import shader_failed
+
+    return float(shader_failed(px[mask], MAGENTA_TOL).mean())
 
 
 # --- Cycles ------------------------------------------------------------------------------------
@@ -457,8 +453,8 @@ def main(argv=None):
     args = parse_args(argv)
     t0 = time.perf_counter()
     obj = build_scene()
-    variants = stock_variants() + floor_variants() + layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET,
-                                                   args.spectral_modes)
+    variants = (stock_variants() + floor_variants()
+                + layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET, args.spectral_modes))
     d = dict(machine=machine_info(), seconds=0.0,
              settings=dict(size=SIZE, subdiv=SUBDIV_LEVELS, hdri=hdri_path().name, sun=SUN_STRENGTH,
                            samples=args.samples, reps=args.reps, threads=1, seed=SEED, quick=args.quick,

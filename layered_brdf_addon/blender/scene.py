@@ -35,6 +35,15 @@ class SceneSpec:
     osl: bool = False
 
 
+SHADER_FAILED_RGB = (1.0, 0.0, 1.0)  # what Blender renders where a material does not compile
+
+
+def shader_failed(rgb, tol: float = 0.1) -> np.ndarray:
+    """Where the linear colours ``rgb`` (..., 3 or 4) are Blender's "shader failed" magenta,
+    each channel within ``tol``."""
+    return np.all(np.abs(np.asarray(rgb)[..., :3] - np.asarray(SHADER_FAILED_RGB)) < tol, axis=-1)
+
+
 def reset_blender() -> None:
     """Start from factory settings with an empty file."""
     bpy.ops.wm.read_factory_settings(use_empty=True)

@@ -574,7 +574,7 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     lobes = ops.call("lobe groups", channel_lobes,
                      dict(r1=lead_r1, e0=P["e0"], e1=P["e1"], r0=P["r0"], n0=n0, n1=n1, v=v),
                      lobe=plan.lobe, interference=plan.interference)
-    per_group = [k for k in LOBE_PLACEMENT + (FOLD_BASIS if plan.interference else ())]
+    per_group = list(LOBE_PLACEMENT + (FOLD_BASIS if plan.interference else ()))
     split = {k: channels(ops, spread(ops, lobes[k], lead_r1)) for k in per_group}
     zero = (0.0, 0.0, 0.0)
     acc_R, acc_D, acc_T = zero, zero, {g: zero for g in order}
