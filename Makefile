@@ -32,7 +32,7 @@ EXT_ZIP = dist/layered_brdf-$(shell sed -n 's/^version *= *"\(.*\)"/\1/p' blende
 WHICH = $(PY) -c "import importlib.metadata as m, platform; \
     print('Blender', m.version('bpy'), '(bpy) on Python', platform.python_version(), 'in $(VENV)')"
 
-.PHONY: demo test bench bench-scene extension clean which generated
+.PHONY: demo test bench bench-scene extension clean which generated band-fit
 
 $(STAMP): pyproject.toml
 	@test -n "$(PYTHON)" || { echo "Blender $(BLENDER) needs Python $(if $(filter 5.2,$(BLENDER)),3.13,3.11), not found" >&2; exit 1; }
@@ -56,6 +56,10 @@ test: $(STAMP)
 # Rewrite osl/layered_brdf.osl and node_groups/*.json from the shading program.
 generated: $(STAMP)
 	$(PY) -m layered_brdf_addon.backends.generated
+
+# Refit the analytic mode's closed form (model/data/band_fit.json) from the CIE tables, a few minutes.
+band-fit: $(STAMP)
+	$(PY) -c "from layered_brdf_addon.model.spectral_band import main; main()"
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reference.py

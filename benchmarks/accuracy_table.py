@@ -96,9 +96,14 @@ def light_directions(sw: dict, r1: tuple[float, float, float]) -> tuple[np.ndarr
     return l, fallback
 
 
-def modes() -> dict[str, sp.SpectralSampling | None]:
-    """The evaluated modes; ``None`` is the RGB mode (three wavelengths used as channels)."""
-    out: dict[str, sp.SpectralSampling | None] = {"RGB (645/525/445 nm)": None}
+ANALYTIC = "analytic"  # the analytic mode: three channels, interference integrated over each band
+
+
+def modes() -> dict[str, sp.SpectralSampling | str | None]:
+    """The evaluated modes; ``None`` is the RGB mode (three wavelengths used as channels),
+    :data:`ANALYTIC` the analytic mode (model/spectral_band.py)."""
+    out: dict[str, sp.SpectralSampling | str | None] = {"RGB (645/525/445 nm)": None,
+                                                        "analytic (closed-form band)": ANALYTIC}
     for n in sp.SAMPLE_COUNTS:
         out[f"spectral {n}"] = sp.spectral_sampling(n)
     out["spectral 32, point-sampled"] = sp.spectral_sampling(32, "cie1931", "point")
@@ -108,16 +113,16 @@ def modes() -> dict[str, sp.SpectralSampling | None]:
     return out
 
 
-def specular_rgb(mode: sp.SpectralSampling | None, i, o, n0, n1, r1, d) -> np.ndarray:
+def specular_rgb(mode: sp.SpectralSampling | str | None, i, o, n0, n1, r1, d) -> np.ndarray:
     norm = (E0 + 2.0) / (2.0 * np.pi)
-    if mode is None:
-        return specular_brdf(i, o, n0, n1, r1, d, E0, E1, R0, WAVELENGTHS_NM, n0) / norm
+    if mode is None or mode == ANALYTIC:
+        return specular_brdf(i, o, n0, n1, r1, d, E0, E1, R0, WAVELENGTHS_NM, n0, band=mode == ANALYTIC) / norm
     return sp.spectral_specular(i, o, n0, n1, r1, d, E0, E1, R0, mode, n0) / norm
 
 
-def diffuse_rgb(mode: sp.SpectralSampling | None, r1, d) -> np.ndarray:
-    if mode is None:
-        return diffuse_rho(r1, d, R0, WAVELENGTHS_NM)
+def diffuse_rgb(mode: sp.SpectralSampling | str | None, r1, d) -> np.ndarray:
+    if mode is None or mode == ANALYTIC:
+        return diffuse_rho(r1, d, R0, WAVELENGTHS_NM, band=mode == ANALYTIC)
     return sp.spectral_diffuse(r1, d, R0, mode)
 
 
@@ -159,7 +164,7 @@ def accuracy(sw: dict) -> dict:
     diff_de = {m: [] for m in mode_map}
     diff_diff = {m: [] for m in mode_map}
     closure_kinds = {"closure form (beckmann)": "beckmann", "closure form (phong)": "phong",
-                     "single lobe": "single lobe",
+                     "single lobe": "single lobe", "closure form (beckmann), analytic": "beckmann:analytic",
                      **{f"closure form (beckmann), spectral {n}": f"beckmann:spectral{n}" for n in (4, 8, 16, 32)}}
     clo_de = {k: [] for k in closure_kinds}
     clo_de_rgb = {k: [] for k in closure_kinds}
@@ -284,6 +289,8 @@ def thick_layers(r1=(1.5, 1.5, 1.5), bands=((1000.0, 2000.0), (2000.0, 3000.0), 
         for n in (16, 32):
             de = sp.delta_e_2000(diffuse_rgb(sp.spectral_sampling(n), r1, d), ref)
             row[f"spectral {n}"] = dict(mean=float(de.mean()), max=float(de.max()))
+        de = sp.delta_e_2000(diffuse_rgb(ANALYTIC, r1, d), ref)
+        row["analytic"] = dict(mean=float(de.mean()), max=float(de.max()))
         de = sp.delta_e_2000(np.ones_like(ref), ref)
         row["mean colour"] = dict(mean=float(de.mean()), max=float(de.max()))
         out[f"{lo:g}-{hi:g}"] = row
@@ -349,11 +356,12 @@ def markdown(res: dict) -> str:
                      f"{_fmt(row['d_star_diffuse_tol1'])} |")
     tl = res["thick_layers"]
     lines += ["", f"### Thick layers, diffuse, r1 = {'/'.join(f'{x:g}' for x in tl['r1'])}: mean / max CIEDE2000 "
-              "to the ground truth", "", "| d (nm) | spectral 16 | spectral 32 | interference dropped (mean colour) |",
-              "| --- | ---: | ---: | ---: |"]
+              "to the ground truth", "", "| d (nm) | spectral 16 | spectral 32 | analytic | interference dropped (mean colour) |",
+              "| --- | ---: | ---: | ---: | ---: |"]
     for band, row in tl["bands"].items():
         lines.append(f"| {band} | " + " | ".join(f"{_fmt(row[k]['mean'])} / {_fmt(row[k]['max'])}"
-                                                 for k in ("spectral 16", "spectral 32", "mean colour")) + " |")
+                                                 for k in ("spectral 16", "spectral 32", "analytic", "mean colour"))
+                     + " |")
     periods = {f"{t:g}": c["rows"][0][f"periods_tol{t:g}"] for t in (0.5, 1.0, 2.0)}
     lines += ["", f"Optical thickness cut-off r1·d* (ΔE 1): {c['optical_tol1']:g} nm "
               f"(with the Wyman CMFs: {c['optical_tol1_wyman']:g} nm); phase spread across 380-780 nm at d*, "

@@ -1,4 +1,5 @@
-"""Spectral modes of the shading program: baked tables, the numpy closure form, and the guard in Blender."""
+"""Spectral and analytic modes of the shading program: baked tables, the numpy closure form, and the
+shaders against it."""
 import json
 
 import numpy as np
@@ -43,7 +44,8 @@ MODES = ("spectral4", "spectral8", "spectral16", "spectral32")
 @pytest.mark.parametrize("backend", ["nodes", "osl"])
 @pytest.mark.parametrize("kd", [0.0, 0.5])
 def test_spectral_shaders_match_closure_form(backend, kd):
-    """Every spectral mode, dispersive (Fig. 6) and not, in one render per backend and diffuse weight."""
+    """Every spectral mode and the analytic mode, dispersive (Fig. 6) and not, thin and thick, in
+    one render per backend and diffuse weight."""
     from layered_brdf_reference.compare import agreement, lit_mask
 
     from render_helpers import render_row
@@ -51,6 +53,10 @@ def test_spectral_shaders_match_closure_form(backend, kd):
     cases = [preset("fig6_medium").replace(thickness_mode="height", accuracy=a, kd=kd) for a in MODES]
     cases.append(preset("fig4_parallel").replace(thickness_mode="height", accuracy="spectral16", kd=kd,
                                                  r1_r=1.5, r1_g=1.5, r1_b=1.5))
+    analytic = preset("fig6_medium").replace(thickness_mode="height", accuracy="analytic", kd=kd)
+    cases += [analytic, analytic.replace(d_min=800.0, d_max=3000.0),
+              preset("fig4_parallel").replace(thickness_mode="height", accuracy="analytic", kd=kd,
+                                              r1_r=1.5, r1_g=1.5, r1_b=1.5)]
     if backend == "osl":
         cases.append(cases[1].replace(lobe="phong"))
     row = render_row(cases, backend=backend, height=48)

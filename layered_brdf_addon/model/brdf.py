@@ -11,6 +11,7 @@ import numpy as np
 
 from .geometry import Z_AXIS
 from .params import WAVELENGTHS_NM
+from .spectral_band import MIN_PATH_COS, channel_cosine
 
 TWO_PI = 2.0 * np.pi
 
@@ -85,8 +86,13 @@ def _unit_rows(v, fallback=None):
     return tuple(np.where(ok, x * inv, f) for x, f in zip(c, fallback)), ok
 
 
-def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS) -> SpecularTerms:
+def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS,
+                   band=False) -> SpecularTerms:
     """Evaluate eqs. 3-11 with the lobe normalisations of SPEC.
+
+    ``band``: the analytic mode, ``r1`` the three RGB indices and the interference cosine
+    of eq. 5 integrated over each channel's band (:func:`.spectral_band.channel_cosine`)
+    instead of taken at ``wavelengths``.
 
     ``i``, ``o``, ``n0``, ``n1``: (..., 3).  ``r1`` and ``wavelengths``: (C,) or (..., C).
     ``d``: thickness in nm, shape (...).  ``ng``: fallback for a degenerate ``n0``
@@ -145,14 +151,20 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
 
     # Phase, eq. 3, and the total, eq. 5.
     phase = (np.pi * r1 / lam) * (d * (s_i + s_o))  # meaningful where T > 0
-    rho = R + T + 2.0 * np.cos(2.0 * phase) * np.sqrt(R * T)
+    if band:
+        opd = r1 * d * (s_i + s_o)
+        slope = d * (1.0 / np.maximum(s_i, MIN_PATH_COS) + 1.0 / np.maximum(s_o, MIN_PATH_COS))
+        cos2phi = channel_cosine(opd, np.broadcast_to(r1, opd.shape), slope)
+    else:
+        cos2phi = np.cos(2.0 * phase)
+    rho = R + T + 2.0 * cos2phi * np.sqrt(R * T)
     rho = np.maximum(rho, 0.0)  # exact value is >= (sqrt R - sqrt T)^2; removes round-off
     return SpecularTerms(R, T, phase, rho)
 
 
-def specular_brdf(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS):
+def specular_brdf(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS, band=False):
     """The specular ``rho(i, o)`` of eq. 5, shape (..., C)."""
-    return specular_terms(i, o, n0, n1, r1, d, e0, e1, r0, wavelengths, ng).rho
+    return specular_terms(i, o, n0, n1, r1, d, e0, e1, r0, wavelengths, ng, band).rho
 
 
 def diffuse_rd(r1, r0=1.0):
@@ -172,11 +184,17 @@ def diffuse_phase(r1, d, wavelengths=WAVELENGTHS_NM):
     return TWO_PI * np.asarray(r1, dtype=float) * np.asarray(d, dtype=float)[..., None] / np.asarray(wavelengths)
 
 
-def diffuse_rho(r1, d, r0=1.0, wavelengths=WAVELENGTHS_NM):
-    """Eq. 18: ``1 + 2 cos(4 pi r1 d / lambda) sqrt(Td (1 - Td))``, shape (..., C)."""
+def diffuse_rho(r1, d, r0=1.0, wavelengths=WAVELENGTHS_NM, band=False):
+    """Eq. 18: ``1 + 2 cos(4 pi r1 d / lambda) sqrt(Td (1 - Td))``, shape (..., C); ``band``:
+    the cosine integrated over each RGB channel's band (path ``2 r1 d``, slope ``2 d``)."""
     td = diffuse_td(r1, r0)
     amp = 2.0 * np.sqrt(np.clip(td * (1.0 - td), 0.0, None))
-    return np.maximum(1.0 + np.cos(2.0 * diffuse_phase(r1, d, wavelengths)) * amp, 0.0)
+    if band:
+        opd = 2.0 * np.asarray(r1, dtype=float) * np.asarray(d, dtype=float)[..., None]
+        c = channel_cosine(opd, np.broadcast_to(r1, opd.shape), 2.0 * np.asarray(d, dtype=float)[..., None])
+    else:
+        c = np.cos(2.0 * diffuse_phase(r1, d, wavelengths))
+    return np.maximum(1.0 + c * amp, 0.0)
 
 
 def average_refracted_cosine(r1, r0=1.0):
@@ -196,8 +214,10 @@ def average_refracted_cosine(r1, r0=1.0):
 
 
 def layered_brdf(i, o, n0, n1, d, params, ng=Z_AXIS, wavelengths=WAVELENGTHS_NM):
-    """Full BRDF ``ks rho + kd base rho_d / pi`` (SPEC), shape (..., 3)."""
+    """Full BRDF ``ks rho + kd base rho_d / pi`` (SPEC), shape (..., 3); the analytic
+    accuracy mode integrates the interference over each channel's band."""
     p = params
-    fs = specular_brdf(i, o, n0, n1, p.r1, d, p.e0, p.e1, p.r0, wavelengths, ng)
-    fd = diffuse_rho(p.r1, d, p.r0, wavelengths) * np.asarray(p.base_color) / np.pi
+    band = p.accuracy == "analytic"
+    fs = specular_brdf(i, o, n0, n1, p.r1, d, p.e0, p.e1, p.r0, wavelengths, ng, band)
+    fd = diffuse_rho(p.r1, d, p.r0, wavelengths, band) * np.asarray(p.base_color) / np.pi
     return p.ks * fs + p.kd * fd

@@ -96,7 +96,7 @@ THICKNESS_MODES = ("noise", "height")
 NORMAL_MODES = ("parallel", "tilted", "correlated")
 LOBES = ("beckmann", "phong")
 BASE_LAYERS = ("none", "transparent")
-ACCURACY_MODES = ("rgb", "spectral4", "spectral8", "spectral16", "spectral32")
+ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
 
 
 @dataclass
@@ -159,8 +159,10 @@ class LayeredParams:
                          "What lies under the layer besides the diffuse part: 'none' (leave the Base Shader "
                          "input to the artist) or 'transparent' (a soap film)", options=BASE_LAYERS, group="Diffuse")
     accuracy: str = _p("rgb", "Accuracy",
-                       "Colour model: 'rgb' (the paper's three wavelengths) or 'spectralN' (N wavelengths, "
-                       "r1 from a Cauchy fit, integrated against the CIE 1931 observer under D65)",
+                       "Colour model: 'rgb' (the paper's three wavelengths), 'analytic' (three channels, each "
+                       "with the interference integrated over its band in closed form: thick layers fade to their "
+                       "average colour instead of aliasing) or 'spectralN' (N wavelengths, r1 from a Cauchy fit, "
+                       "integrated against the CIE 1931 observer under D65)",
                        options=ACCURACY_MODES, group="Accuracy")
     lobe: str = _p("beckmann", "Lobe",
                    "Closure used for the specular lobes: 'beckmann' (both backends) or 'phong' (OSL only)",

@@ -18,7 +18,8 @@ class EffectPlan:
     dispersion: bool = True  # one transmitted lobe per channel (else one shared)
     lobe: str = "beckmann"
     spectral: int = 0  # 0: the paper's RGB; N: N wavelengths
-    interference: bool = True  # False: a spectral layer so thick that interference averages out
+    interference: bool = True  # False: a spectral or analytic layer so thick that interference averages out
+    analytic: bool = False  # RGB channels with the interference integrated over each channel's band
 
     @classmethod
     def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
@@ -34,6 +35,8 @@ class EffectPlan:
         ]
         if self.spectral:
             parts.append(f"W{self.spectral}")
+        if self.analytic:
+            parts.append("A")
         if not self.interference:
             parts.append("i")
         return "".join(parts)
@@ -51,6 +54,8 @@ class EffectPlan:
                     "correlated": "lower normal from the thickness gradient (3 extra pattern evaluations)"}[self.normals])
         if self.spectral:
             out.append(f"{self.spectral} wavelengths, summed into RGB lobes")
+        if self.analytic:
+            out.append("interference integrated over each colour channel's band (analytic spectral)")
         if not self.interference:
             out.append("no interference: the layer is thick enough for it to average out over the band")
         if self.specular:

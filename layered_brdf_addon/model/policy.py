@@ -73,15 +73,18 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
         normals = "parallel"  # a constant thickness has no gradient: n1 = n0
     dispersion = not (p.r1_r == p.r1_g == p.r1_b) or moving("dispersion")
     spectral = spectral_count(p.accuracy)
-    interference = not (spectral and not moving("interference") and interference_averages_out(p))
+    analytic = p.accuracy == "analytic"
+    banded = bool(spectral) or analytic  # colour integrated over the band, where interference can average out
+    interference = not (banded and not moving("interference") and interference_averages_out(p))
     return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
                       thickness=thickness, normals=normals, dispersion=dispersion, lobe=p.lobe,
-                      spectral=spectral, interference=interference)
+                      spectral=spectral, interference=interference, analytic=analytic)
 
 
 def spectral_count(accuracy: str) -> int:
-    """Number of wavelengths of an accuracy mode (0: the paper's RGB)."""
-    return 0 if accuracy == "rgb" else int(accuracy[len("spectral"):])
+    """Number of wavelengths of an accuracy mode (0: the paper's RGB and the analytic mode,
+    which evaluate three channels)."""
+    return int(accuracy[len("spectral"):]) if accuracy.startswith("spectral") else 0
 
 
 def interference_averages_out(p: LayeredParams) -> bool:

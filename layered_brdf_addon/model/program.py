@@ -24,6 +24,7 @@ from typing import Any
 
 from .params import WAVELENGTHS_NM, iter_sockets
 from .plan import EffectPlan
+from .spectral_band import MIN_PATH_COS, band_fit
 
 INV_2PI = 0.5 / math.pi
 DEG = math.pi / 180.0
@@ -398,11 +399,13 @@ def lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v):
 
 @shader_function
 def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through, atten, *,
-                    interference=True):
+                    interference=True, band=False, dispersion=True):
     """Values at their centres of the reflected, transmitted and interference lobes (eqs.
     3-9) of one wavelength ``lam`` (or three: a triple), on lobes placed by
     :func:`lobe_geometry` (``cos_ls``: cosine of the transmitted centre ``l*``, ``cos_ci``:
-    of the interference centre, ``atten``: the interference lobe's attenuation)."""
+    of the interference centre, ``atten``: the interference lobe's attenuation).  ``band``:
+    the three RGB channels (a triple) with the interference integrated over each channel's
+    band (:func:`band_cosine`) instead of taken at ``lam``."""
     f = fresnel_f0(ops, r1, r0)
     F = schlick(ops, cos_v, f)
     # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
@@ -418,23 +421,78 @@ def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail
     AT = ops.select(through, AT_amp * cos_ls, 0.0)
     if interference:
         s_i = ops.sqrt((1.0 - eta2) + eta2 * (cos_ci * cos_ci))
-        phase2 = (2.0 * math.pi / lam) * r1 * d * (s_i + s_o)  # twice the phase of eq. 3
-        AI = ops.select(through, ops.cos(phase2) * ops.sqrt(AR_amp * AT_amp) * (atten * cos_ci) * 2.0, 0.0)
+        if band:
+            # Eq. 3 over each channel's band: the path D = r1 d (s_i + s_o) and its slope
+            # dD/dr1 = d (1/s_i + 1/s_o) (r1 s = sqrt(r1^2 - r0^2 sin^2)).
+            opd = r1 * d * (s_i + s_o)
+            slope = d * (1.0 / ops.maximum(s_i, MIN_PATH_COS) + 1.0 / ops.maximum(s_o, MIN_PATH_COS))
+            cos2phi = band_cosine(ops, opd, slope, r1, dispersion=dispersion)
+        else:
+            cos2phi = ops.cos((2.0 * math.pi / lam) * r1 * d * (s_i + s_o))  # twice the phase of eq. 3
+        AI = ops.select(through, cos2phi * ops.sqrt(AR_amp * AT_amp) * (atten * cos_ci) * 2.0, 0.0)
     else:
         AI = 0.0  # averaged over the band: cos(2 Phi) has mean 0
     return AR_amp * cos_v, AT, AI
 
 
 @shader_function
-def diffuse_rho(ops, r1, r0, lam, d):
-    """Eqs. 15 and 18: ``1 + 2 cos(4 pi r1 d / lambda) sqrt(Td (1 - Td))``."""
+def diffuse_rho(ops, r1, r0, lam, d, *, band=False, dispersion=True):
+    """Eqs. 15 and 18: ``1 + 2 cos(4 pi r1 d / lambda) sqrt(Td (1 - Td))``; ``band``: the
+    cosine integrated over each RGB channel's band (:func:`band_cosine`, the path
+    ``D = 2 r1 d`` with slope ``dD/dr1 = 2 d``)."""
     td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
-    return ops.maximum(1.0 + ops.cos((4.0 * math.pi / lam) * r1 * d) * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
+    if band:
+        c = band_cosine(ops, r1 * (2.0 * d), 2.0 * d, r1, dispersion=dispersion)
+    else:
+        c = ops.cos((4.0 * math.pi / lam) * r1 * d)
+    return ops.maximum(1.0 + c * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
 
 
-def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM):
-    """``kd base rho_d`` per channel (eq. 14), the three channels as one triple."""
-    rho = diffuse_rho(ops, ops.combine(*P["r1"]), P["r0"], ops.triple(*wavelengths), d)
+@shader_function
+def band_cosine(ops, opd, slope, r1, *, dispersion):
+    """The interference cosine ``cos(2 pi D / lambda)`` of a path difference ``D`` (nm; a
+    triple, one per RGB channel, at the channel's index) integrated over each channel's
+    band of the spectral ground truth, in closed form (docs/spectral.md, "Analytic mode"):
+    a sum of damped cosines ``a exp(-b D^2) cos(2 pi nu D)``, the Fourier transform of a
+    fit of the channel's weight by Gaussians in wavenumber (model/spectral_band.py).
+
+    With ``dispersion`` each Gaussian sees the index about its own wavenumber, to second
+    order: the path moves by ``slope (r1(nu) - r1_c)`` (``slope = dD/dr1``), the damping takes
+    the group path ``g = D + slope nu dr1/dnu``, and the phase's curvature is a chirp ``c``
+    (a Gaussian with a quadratic phase: ``a (1 + c^2)^(-1/4) exp(-b g^2 / (1 + c^2))
+    cos(2 pi nu D + atan(c) / 2 - c b g^2 / (1 + c^2))``); the three are constant rows times
+    the indices ``r1``, times ``slope``.  A zero path gives 1, the paper's RGB value."""
+    def rows(name):
+        return ops.combine(*(ops.dot(r1, tuple(row)) for row in slot[name]))
+
+    total = None
+    for slot in band_fit()["slots"]:
+        neg_b = tuple(-b for b in slot["damping"])
+        if dispersion:
+            x = opd + slope * rows("index_shift")
+            g = x + slope * rows("index_slope")
+            c = slope * rows("index_chirp")
+            den = 1.0 + c * c
+            arg = g * g * neg_b / den  # -b g^2 / (1 + c^2)
+            half_atan = ops.combine(*(ops.atan2(ck, 1.0) for ck in ops.components(c))) * 0.5
+            phase = x * tuple(2.0 * math.pi * nu for nu in slot["wavenumber"]) + half_atan + arg * c
+            amplitude = tuple(slot["amplitude"]) / ops.sqrt(ops.sqrt(den))
+        else:
+            arg = opd * opd * neg_b
+            phase = opd * tuple(2.0 * math.pi * nu for nu in slot["wavenumber"])
+            amplitude = tuple(slot["amplitude"])
+        term = ops.exp(arg) * ops.cos(phase) * amplitude
+        total = term if total is None else total + term
+    return total
+
+
+def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM, band=False, dispersion=True, interference=True):
+    """``kd base rho_d`` per channel (eq. 14), the three channels as one triple; without
+    ``interference`` (a layer so thick that it averages out over the band) ``rho_d = 1``."""
+    if not interference:
+        return tuple(P["kd"] * b for b in P["base"])
+    rho = diffuse_rho(ops, ops.combine(*P["r1"]), P["r0"], ops.triple(*wavelengths), d, band=band,
+                      dispersion=dispersion)
     colour = ops.named("diffuse_colour", ops.combine(*P["base"]) * (P["kd"] * rho))
     return ops.components(colour)
 
@@ -465,15 +523,18 @@ def channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, lobe="beckmann", interference=
 LOBE_PLACEMENT = ("cos_ls", "cos_ci", "tail", "through", "atten")  # what lobe_amplitudes takes from the lobes
 
 
-def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, lobe="beckmann", interference=True):
+def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, lobe="beckmann", interference=True,
+                  band=False):
     """The channels' lobes (eqs. 3-11), the interference folded into the other two, and the
     normals, exponents, alphas and weights of their transmitted closures (``N_T0``.., one
     per lobe direction).  ``r1``, ``lam``: a scalar (one wavelength) or a triple (the RGB
     channels); ``r1_lobes``: the index that places the lobes, where the channels share
-    them (equal indices), else ``r1``."""
+    them (equal indices), else ``r1``; ``band``: the interference integrated over each RGB
+    channel's band (the analytic mode)."""
     lobes = channel_lobes(ops, r1 if r1_lobes is None else r1_lobes, e0, e1, r0, n0, n1, v, lobe, interference)
     AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, lobes["cos_v"],
-                                 *(spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT), interference=interference)
+                                 *(spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT), interference=interference,
+                                 band=band, dispersion=r1_lobes is None)
     if interference:
         AR, AT = fold_interference(ops, AR, AT, AI, {k: spread(ops, lobes[k], r1) for k in FOLD_BASIS})
     out = dict(lobes, AR=AR, w_T=AT * spread(ops, lobes["inv_peak_T"], r1))
@@ -617,7 +678,8 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
         return shade_spectral(ops, P, n0, n1, d, v, plan)
     res = ShadingResult()
     if plan.diffuse:
-        res.diffuse = diffuse_colour(ops, P, d, wavelengths)
+        res.diffuse = diffuse_colour(ops, P, d, wavelengths, band=plan.analytic, dispersion=plan.dispersion,
+                                     interference=plan.interference)
     if not plan.specular:
         return res
     inputs = dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), e0=P["e0"], e1=P["e1"],
@@ -626,7 +688,10 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
         # Equal indices: every channel's lobes have the same centre and exponent, placed
         # once (by green's index); each channel keeps its own amplitudes.
         inputs["r1_lobes"] = P["r1"][1]
-    b = ops.call("channels" if plan.dispersion else "channels, shared lobes", channel_block, inputs, lobe=plan.lobe)
+    # The analytic mode's variant of the block (the paper's RGB keeps its interference).
+    band = dict(band=True, interference=plan.interference) if plan.analytic else {}
+    b = ops.call("channels" if plan.dispersion else "channels, shared lobes", channel_block, inputs, lobe=plan.lobe,
+                 **band)
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
     w = ops.components(b["w_T"])
     if not plan.dispersion:

@@ -154,8 +154,9 @@ def exact_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTH
     cos_l = np.maximum(dot(n0, l), 0.0)
     i = np.broadcast_to(-np.asarray(l), np.shape(n0))
     o = np.broadcast_to(np.asarray(v), np.shape(n0))
-    fs = specular_brdf(i, o, n0, n1, params.r1, d, params.e0, params.e1, params.r0, wavelengths, ng=n0)
-    fd = diffuse_rho(params.r1, d, params.r0, wavelengths) * np.asarray(params.base_color) / np.pi
+    band = params.accuracy == "analytic"
+    fs = specular_brdf(i, o, n0, n1, params.r1, d, params.e0, params.e1, params.r0, wavelengths, ng=n0, band=band)
+    fd = diffuse_rho(params.r1, d, params.r0, wavelengths, band) * np.asarray(params.base_color) / np.pi
     return cos_l[..., None] * (params.ks * fs + params.kd * fd)
 
 
