@@ -42,7 +42,9 @@ def load():
     thr = acc["throughput"]
     rgb_key = next(k for k in modes if k.startswith("RGB"))
     numpy_pts = []
-    for name in [rgb_key, "spectral 4", "spectral 8", "spectral 16", "spectral 32"]:
+    names = [rgb_key] + [k for k in modes if k.startswith("analytic")] + ["spectral 4", "spectral 8", "spectral 16",
+                                                                         "spectral 32"]
+    for name in names:
         numpy_pts.append((thr[rgb_key]["specular"] / thr[name]["specular"], modes[name]["specular"]["mean"],
                           name.split(" (")[0]))
     levels = acc["accuracy"]["closure_levels"]
@@ -50,8 +52,8 @@ def load():
 
     def mode_point(ratio, backend, mode):
         """(cost ratio, mean CIEDE2000 of the mode's closure form, label), or None."""
-        level = "closure form (beckmann)" if mode == "rgb" else \
-            f"closure form (beckmann), spectral {mode[len('spectral'):]}"
+        level = {"rgb": "closure form (beckmann)", "analytic": "closure form (beckmann), analytic"}.get(
+            mode, f"closure form (beckmann), spectral {mode[len('spectral'):]}")
         if level not in levels:
             return None
         label = f"{backend} {'RGB' if mode == 'rgb' else mode.replace('spectral', 'spectral ')}"
@@ -82,7 +84,7 @@ def main():
     numpy_pts, shader_pts = load()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, pts, xlabel, title in (
-            (axes[0], numpy_pts, "numpy cost per evaluation (x RGB)", "numpy reference: RGB vs spectral"),
+            (axes[0], numpy_pts, "numpy cost per evaluation (x RGB)", "numpy reference: RGB vs analytic vs spectral"),
             (axes[1], shader_pts, "render cost per sample (x Principled + Thin Film)", "Cycles shaders (Fig. 6 medium)")):
         xs, ys = [p[0] for p in pts], [p[1] for p in pts]
         ax.scatter(xs, ys, color="tab:blue", zorder=3)

@@ -99,3 +99,18 @@ def test_planner_keeps_the_analytic_mode_and_drops_interference_that_averages_ou
     assert not plan_effects(thick).interference
     assert plan_effects(thick, animated={"d_min"}).interference
     assert not plan_effects(p.replace(accuracy="rgb")).analytic
+
+
+def test_only_the_osl_analytic_shader_filters_over_the_pixel_footprint():
+    """OSL has derivatives: the analytic shader averages the interference over filterwidth of the
+    path; the planner can switch that off, and the RGB shader never has it."""
+    from dataclasses import replace
+
+    from layered_brdf_addon.backends.osl_shader import shader_source
+
+    p = LayeredParams.from_dict(PRESETS["fig6_medium"]).replace(accuracy="analytic")
+    plan = plan_effects(p)
+    assert "filterwidth(opd)" in shader_source(plan)
+    assert "filterwidth(opd)" not in shader_source(replace(plan, footprint=False))
+    assert "filterwidth(opd)" not in shader_source(plan_effects(p.replace(accuracy="rgb")))
+    assert replace(plan, footprint=False).key != plan.key

@@ -295,6 +295,11 @@ class NodeOps:
         """``x``, or 0 where it is NaN: ``Maximum(0, x) + Minimum(0, x)`` (see clamp_input)."""
         return self.maximum(0.0, x) + self.minimum(0.0, x)
 
+    def footprint(self, x):
+        """How much ``x`` changes across the pixel: unknown (SVM has no derivatives of
+        arbitrary values), ``None``."""
+        return None
+
     def triple(self, x, y, z):
         """A constant channel triple (a Combine XYZ node, which Cycles folds)."""
         n, d = self.node("ShaderNodeCombineXYZ", {"X": float(x), "Y": float(y), "Z": float(z)})

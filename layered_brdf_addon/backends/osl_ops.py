@@ -274,6 +274,10 @@ class OslOps:
     def triple(self, x, y, z):
         return self.atom(_vector_literal((x, y, z)), "vector")
 
+    def footprint(self, x):
+        """How much ``x`` changes across the pixel: OSL's ``filterwidth`` (from its derivatives)."""
+        return self.call_expr("filterwidth", (x,), _kind(x))
+
     def components(self, v):
         return tuple(self.emit("float", f"{self.use(v, PREC_ATOM)}[{k}]") for k in range(3))
 

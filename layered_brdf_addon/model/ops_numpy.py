@@ -262,6 +262,11 @@ def named(hint, x):
     return x
 
 
+def footprint(x):
+    """How much ``x`` changes across the pixel: unknown here (no derivatives), ``None``."""
+    return None
+
+
 @_elementwise
 def clamp_input(x, lo, hi):
     """An input clamped to its parameter's range; NaN gives ``lo``."""

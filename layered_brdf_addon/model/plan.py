@@ -20,6 +20,7 @@ class EffectPlan:
     spectral: int = 0  # 0: the paper's RGB; N: N wavelengths
     interference: bool = True  # False: a spectral or analytic layer so thick that interference averages out
     analytic: bool = False  # RGB channels with the interference integrated over each channel's band
+    footprint: bool = True  # analytic: also over the pixel's footprint, where the backend has derivatives (OSL)
 
     @classmethod
     def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
@@ -36,7 +37,7 @@ class EffectPlan:
         if self.spectral:
             parts.append(f"W{self.spectral}")
         if self.analytic:
-            parts.append("A")
+            parts.append("A" if self.footprint else "Af")
         if not self.interference:
             parts.append("i")
         return "".join(parts)
@@ -55,7 +56,8 @@ class EffectPlan:
         if self.spectral:
             out.append(f"{self.spectral} wavelengths, summed into RGB lobes")
         if self.analytic:
-            out.append("interference integrated over each colour channel's band (analytic spectral)")
+            out.append("interference integrated over each colour channel's band (analytic spectral)"
+                       + (", and over the pixel's footprint in OSL" if self.footprint else ""))
         if not self.interference:
             out.append("no interference: the layer is thick enough for it to average out over the band")
         if self.specular:

@@ -399,13 +399,14 @@ def lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v):
 
 @shader_function
 def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through, atten, *,
-                    interference=True, band=False, dispersion=True):
+                    interference=True, band=False, dispersion=True, footprint=False):
     """Values at their centres of the reflected, transmitted and interference lobes (eqs.
     3-9) of one wavelength ``lam`` (or three: a triple), on lobes placed by
     :func:`lobe_geometry` (``cos_ls``: cosine of the transmitted centre ``l*``, ``cos_ci``:
     of the interference centre, ``atten``: the interference lobe's attenuation).  ``band``:
     the three RGB channels (a triple) with the interference integrated over each channel's
-    band (:func:`band_cosine`) instead of taken at ``lam``."""
+    band (:func:`band_cosine`) instead of taken at ``lam``, and with ``footprint`` over the
+    pixel's footprint too."""
     f = fresnel_f0(ops, r1, r0)
     F = schlick(ops, cos_v, f)
     # Eq. 6 with the modified-Phong normalisation (e0 + 2)/(2 pi), at the lobe's centre.
@@ -426,7 +427,7 @@ def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail
             # dD/dr1 = d (1/s_i + 1/s_o) (r1 s = sqrt(r1^2 - r0^2 sin^2)).
             opd = r1 * d * (s_i + s_o)
             slope = d * (1.0 / ops.maximum(s_i, MIN_PATH_COS) + 1.0 / ops.maximum(s_o, MIN_PATH_COS))
-            cos2phi = band_cosine(ops, opd, slope, r1, dispersion=dispersion)
+            cos2phi = band_cosine(ops, opd, slope, r1, dispersion=dispersion, footprint=footprint)
         else:
             cos2phi = ops.cos((2.0 * math.pi / lam) * r1 * d * (s_i + s_o))  # twice the phase of eq. 3
         AI = ops.select(through, cos2phi * ops.sqrt(AR_amp * AT_amp) * (atten * cos_ci) * 2.0, 0.0)
@@ -436,20 +437,20 @@ def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail
 
 
 @shader_function
-def diffuse_rho(ops, r1, r0, lam, d, *, band=False, dispersion=True):
+def diffuse_rho(ops, r1, r0, lam, d, *, band=False, dispersion=True, footprint=False):
     """Eqs. 15 and 18: ``1 + 2 cos(4 pi r1 d / lambda) sqrt(Td (1 - Td))``; ``band``: the
     cosine integrated over each RGB channel's band (:func:`band_cosine`, the path
     ``D = 2 r1 d`` with slope ``dD/dr1 = 2 d``)."""
     td = 80.0 * r0 * r1 / (21.0 * (r1 + r0) * (r1 + r0))
     if band:
-        c = band_cosine(ops, r1 * (2.0 * d), 2.0 * d, r1, dispersion=dispersion)
+        c = band_cosine(ops, r1 * (2.0 * d), 2.0 * d, r1, dispersion=dispersion, footprint=footprint)
     else:
         c = ops.cos((4.0 * math.pi / lam) * r1 * d)
     return ops.maximum(1.0 + c * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
 
 
 @shader_function
-def band_cosine(ops, opd, slope, r1, *, dispersion):
+def band_cosine(ops, opd, slope, r1, *, dispersion, footprint=False):
     """The interference cosine ``cos(2 pi D / lambda)`` of a path difference ``D`` (nm; a
     triple, one per RGB channel, at the channel's index) integrated over each channel's
     band of the spectral ground truth, in closed form (docs/spectral.md, "Analytic mode"):
@@ -461,10 +462,16 @@ def band_cosine(ops, opd, slope, r1, *, dispersion):
     the group path ``g = D + slope nu dr1/dnu``, and the phase's curvature is a chirp ``c``
     (a Gaussian with a quadratic phase: ``a (1 + c^2)^(-1/4) exp(-b g^2 / (1 + c^2))
     cos(2 pi nu D + atan(c) / 2 - c b g^2 / (1 + c^2))``); the three are constant rows times
-    the indices ``r1``, times ``slope``.  A zero path gives 1, the paper's RGB value."""
+    the indices ``r1``, times ``slope``.  A zero path gives 1, the paper's RGB value.
+
+    With ``footprint``, where the backend knows how much the path changes across the pixel
+    (OSL's derivatives: ``w = filterwidth(D)``), each term is also averaged over a box of
+    that width, to second order ``exp(-pi^2 nu^2 w^2 / 6)``: a thickness that varies within
+    a pixel (noise seen from far away) averages out instead of turning into noise."""
     def rows(name):
         return ops.combine(*(ops.dot(r1, tuple(row)) for row in slot[name]))
 
+    w = ops.footprint(opd) if footprint else None
     total = None
     for slot in band_fit()["slots"]:
         neg_b = tuple(-b for b in slot["damping"])
@@ -481,18 +488,21 @@ def band_cosine(ops, opd, slope, r1, *, dispersion):
             arg = opd * opd * neg_b
             phase = opd * tuple(2.0 * math.pi * nu for nu in slot["wavenumber"])
             amplitude = tuple(slot["amplitude"])
+        if w is not None:
+            arg = arg + w * w * tuple(-(math.pi * nu) ** 2 / 6.0 for nu in slot["wavenumber"])
         term = ops.exp(arg) * ops.cos(phase) * amplitude
         total = term if total is None else total + term
     return total
 
 
-def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM, band=False, dispersion=True, interference=True):
+def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM, band=False, dispersion=True, interference=True,
+                   footprint=False):
     """``kd base rho_d`` per channel (eq. 14), the three channels as one triple; without
     ``interference`` (a layer so thick that it averages out over the band) ``rho_d = 1``."""
     if not interference:
         return tuple(P["kd"] * b for b in P["base"])
     rho = diffuse_rho(ops, ops.combine(*P["r1"]), P["r0"], ops.triple(*wavelengths), d, band=band,
-                      dispersion=dispersion)
+                      dispersion=dispersion, footprint=footprint)
     colour = ops.named("diffuse_colour", ops.combine(*P["base"]) * (P["kd"] * rho))
     return ops.components(colour)
 
@@ -524,17 +534,17 @@ LOBE_PLACEMENT = ("cos_ls", "cos_ci", "tail", "through", "atten")  # what lobe_a
 
 
 def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, lobe="beckmann", interference=True,
-                  band=False):
+                  band=False, footprint=False):
     """The channels' lobes (eqs. 3-11), the interference folded into the other two, and the
     normals, exponents, alphas and weights of their transmitted closures (``N_T0``.., one
     per lobe direction).  ``r1``, ``lam``: a scalar (one wavelength) or a triple (the RGB
     channels); ``r1_lobes``: the index that places the lobes, where the channels share
     them (equal indices), else ``r1``; ``band``: the interference integrated over each RGB
-    channel's band (the analytic mode)."""
+    channel's band (the analytic mode), with ``footprint`` over the pixel's too."""
     lobes = channel_lobes(ops, r1 if r1_lobes is None else r1_lobes, e0, e1, r0, n0, n1, v, lobe, interference)
     AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, lobes["cos_v"],
                                  *(spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT), interference=interference,
-                                 band=band, dispersion=r1_lobes is None)
+                                 band=band, dispersion=r1_lobes is None, footprint=footprint)
     if interference:
         AR, AT = fold_interference(ops, AR, AT, AI, {k: spread(ops, lobes[k], r1) for k in FOLD_BASIS})
     out = dict(lobes, AR=AR, w_T=AT * spread(ops, lobes["inv_peak_T"], r1))
@@ -679,7 +689,7 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     res = ShadingResult()
     if plan.diffuse:
         res.diffuse = diffuse_colour(ops, P, d, wavelengths, band=plan.analytic, dispersion=plan.dispersion,
-                                     interference=plan.interference)
+                                     interference=plan.interference, footprint=plan.analytic and plan.footprint)
     if not plan.specular:
         return res
     inputs = dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), e0=P["e0"], e1=P["e1"],
@@ -689,7 +699,7 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
         # once (by green's index); each channel keeps its own amplitudes.
         inputs["r1_lobes"] = P["r1"][1]
     # The analytic mode's variant of the block (the paper's RGB keeps its interference).
-    band = dict(band=True, interference=plan.interference) if plan.analytic else {}
+    band = dict(band=True, interference=plan.interference, footprint=plan.footprint) if plan.analytic else {}
     b = ops.call("channels" if plan.dispersion else "channels, shared lobes", channel_block, inputs, lobe=plan.lobe,
                  **band)
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
