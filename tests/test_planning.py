@@ -97,8 +97,10 @@ def test_interference_cutoff_constant_matches_its_measurement():
 def test_thick_spectral_layers_drop_interference_thin_and_rgb_keep_it():
     thick = preset("soap_bubble").replace(d_min=6000.0, d_max=9000.0)
     assert plan_effects(thick.replace(accuracy="spectral32")).interference is False
-    assert plan_effects(thick).interference is True  # RGB: three wavelengths never average out
+    assert plan_effects(thick.replace(accuracy="analytic")).interference is False
+    assert plan_effects(thick.replace(accuracy="rgb")).interference is True  # three wavelengths never average out
     assert plan_effects(preset("soap_bubble").replace(accuracy="spectral32")).interference is True
+    assert plan_effects(preset("soap_bubble").replace(accuracy="analytic")).interference is True
 
 
 @pytest.mark.slow

@@ -313,6 +313,35 @@ def test_toggling_an_effect_rebuilds_the_tree():
     assert shader_node(mat).inputs["tilt"].default_value == pytest.approx(12.0)
 
 
+def test_a_material_built_before_the_analytic_default_keeps_its_colour_model(tmp_path):
+    """'rgb' was the default accuracy: a material built then never wrote it (Blender stores a
+    setting once written).  Saved, reopened and edited, it stays RGB; new materials get the
+    analytic mode, and keep it whatever the default becomes."""
+    obj = plain_object()
+    mat = load_preset(obj, "oil_slick")
+    assert properties.settings(mat).accuracy == "analytic" and built_plan(mat).endswith("A")
+    assert properties.settings(mat).is_property_set("accuracy")
+    assert mat["layered_brdf_enums"]["accuracy"] == "analytic"
+    # What a file saved before the change holds: an RGB build, no accuracy written anywhere.
+    properties.settings(mat).accuracy = "rgb"
+    bpy.context.view_layer.update()
+    rgb_plan = built_plan(mat)
+    assert not rgb_plan.endswith("A")
+    properties.settings(mat).property_unset("accuracy")
+    enums = mat["layered_brdf_enums"].to_dict()
+    del enums["accuracy"]
+    mat["layered_brdf_enums"] = enums
+    path, name = tmp_path / "legacy.blend", mat.name
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    mat = bpy.data.materials[name]
+    assert properties.params_of(mat).accuracy == "rgb"
+    shader_node(mat).inputs["d_max"].default_value = 650.0  # an edit: the material is rebuilt if needed
+    bpy.context.view_layer.update()
+    assert built_plan(mat) == rgb_plan and properties.settings(mat).accuracy == "rgb"
+    assert properties.settings(mat).is_property_set("accuracy")
+
+
 def test_animated_driven_or_linked_sockets_keep_their_effects():
     obj = plain_object()
     mat = load_preset(obj, "fig4_parallel")

@@ -492,7 +492,7 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     set_inputs(node, params)
     mat["layered_brdf_backend"] = backend
     mat["layered_brdf_enums"] = {"thickness_mode": params.thickness_mode, "normal_mode": params.normal_mode,
-                                 "lobe": params.lobe, "base_layer": params.base_layer}
+                                 "lobe": params.lobe, "base_layer": params.base_layer, "accuracy": params.accuracy}
     return mat
 
 

@@ -138,9 +138,26 @@ def settings(mat):
     return getattr(mat, SETTINGS)
 
 
+# Settings whose default has changed, with the default a material built before the change
+# had: Blender stores a setting only once it is written, so a material that kept the old
+# default would otherwise read the new one and change its look on the next rebuild.
+LEGACY_DEFAULTS = {"accuracy": "rgb"}
+
+
+def _legacy_values(mat) -> dict:
+    """The values of :data:`LEGACY_DEFAULTS` settings that ``mat`` (built by the add-on) never
+    wrote: what it was built with (its stamped enums), else the old default."""
+    st = settings(mat)
+    if mat.get(BUILD_KEY) is None:
+        return {}
+    stored = mat.get(ENUMS_KEY)
+    enums = dict(stored.to_dict()) if stored is not None else {}
+    return {name: enums.get(name, old) for name, old in LEGACY_DEFAULTS.items() if not st.is_property_set(name)}
+
+
 def _setting_values(mat) -> dict:
     st = settings(mat)
-    return {s.name: getattr(st, s.name) for s in setting_specs()}
+    return {**{s.name: getattr(st, s.name) for s in setting_specs()}, **_legacy_values(mat)}
 
 
 def _check_local(mat) -> None:
@@ -207,7 +224,8 @@ def write_settings(mat, params: LayeredParams, backend: str) -> None:
     st = settings(mat)
     with suspended_updates():
         for s in setting_specs():
-            if getattr(st, s.name) != getattr(params, s.name):
+            # Written even when equal to the default, so that a later default cannot change it.
+            if getattr(st, s.name) != getattr(params, s.name) or not st.is_property_set(s.name):
                 setattr(st, s.name, getattr(params, s.name))
         if st.backend != backend:
             st.backend = backend
@@ -217,9 +235,16 @@ def write_settings(mat, params: LayeredParams, backend: str) -> None:
 def adopt(mat, keep: str | None = None) -> None:
     """Copy a material's built enums and backend into its settings, once (e.g. made by a script).
 
-    ``keep`` names a setting the user has just changed: it is not overwritten.
+    ``keep`` names a setting the user has just changed: it is not overwritten.  A setting whose
+    default has changed since the material was built is pinned to what it was built with
+    (:data:`LEGACY_DEFAULTS`).
     """
     st = settings(mat)
+    legacy = {k: v for k, v in _legacy_values(mat).items() if k != keep}
+    if legacy:
+        with suspended_updates():
+            for name, value in legacy.items():
+                setattr(st, name, value)
     if st.adopted:
         return
     stored = mat.get(ENUMS_KEY)

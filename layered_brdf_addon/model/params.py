@@ -158,7 +158,7 @@ class LayeredParams:
     base_layer: str = _p("none", "Base shader",
                          "What lies under the layer besides the diffuse part: 'none' (leave the Base Shader "
                          "input to the artist) or 'transparent' (a soap film)", options=BASE_LAYERS, group="Diffuse")
-    accuracy: str = _p("rgb", "Accuracy",
+    accuracy: str = _p("analytic", "Accuracy",
                        "Colour model: 'rgb' (the paper's three wavelengths), 'analytic' (three channels, each "
                        "with the interference integrated over its band in closed form: thick layers fade to their "
                        "average colour instead of aliasing) or 'spectralN' (N wavelengths, r1 from a Cauchy fit, "

@@ -48,6 +48,11 @@ ARTIST_PRESETS: dict[str, dict] = {
                         kd=1.0, base_r=0.75, base_g=0.42, base_b=0.28),
 }
 
+# The paper's figures keep the paper's colour model (three wavelengths as R, G, B); new
+# materials and the artist presets use the analytic mode, the default.
+for _overrides in PAPER_PRESETS.values():
+    _overrides.setdefault("accuracy", "rgb")
+
 PRESETS: dict[str, dict] = {**PAPER_PRESETS, **ARTIST_PRESETS}
 
 
