@@ -149,11 +149,15 @@ def layered_variant(obj, preset_name: str, backend: str, accuracy: str) -> Varia
 
 
 def layered_variants(obj, presets, backends, spectral_preset, spectral_modes) -> list[Variant]:
-    """Every preset x backend in RGB, then the other accuracy modes of one preset."""
-    combos = [(p, b, "rgb") for p in presets for b in backends]
-    combos += [(spectral_preset, b, m) for m in spectral_modes if m != "rgb" for b in backends]
+    """Every preset x backend in its own accuracy mode (the paper's figures RGB, the artist
+    presets analytic), then the other accuracy modes of one preset."""
+    from layered_brdf_addon.model import preset
+
+    combos = [(p, b, preset(p).accuracy) for p in presets for b in backends]
+    own = preset(spectral_preset).accuracy
+    combos += [(spectral_preset, b, m) for m in spectral_modes if m != own for b in backends]
     if spectral_preset not in presets:
-        combos += [(spectral_preset, b, "rgb") for b in backends if "rgb" in spectral_modes]
+        combos += [(spectral_preset, b, own) for b in backends if own in spectral_modes]
     return [layered_variant(obj, *c) for c in combos]
 
 
@@ -366,11 +370,13 @@ def measure_eevee(obj, variants, samples, frames, log=print) -> dict:
 
 
 def eevee_variants(obj, measured, presets, failing) -> list[Variant]:
-    """Plain Principled, the RGB node group of ``presets`` and the known-failing group:
-    the Cycles variants (``measured``) where there are, new ones where not."""
+    """Plain Principled, the node group of ``presets`` (each in its own accuracy mode) and the
+    known-failing group: the Cycles variants (``measured``) where there are, new ones where not."""
+    from layered_brdf_addon.model import preset
+
     by_key = {(v.preset, v.backend, v.accuracy): v for v in measured}
     vs = [next(v for v in measured if v.label == "Principled BSDF")]
-    for key in [(p, "rgb") for p in presets] + ([failing] if failing else []):
+    for key in [(p, preset(p).accuracy) for p in presets] + ([failing] if failing else []):
         vs.append(by_key.get((key[0], "nodes", key[1])) or layered_variant(obj, key[0], "nodes", key[1]))
     return vs
 

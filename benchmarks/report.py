@@ -16,7 +16,7 @@ def accuracy_tables() -> str:
         t = thr.get(name, {}).get("specular", float("nan"))
         out.append(f"| {name} | {m['specular']['mean']:.2f} / {m['specular']['p95']:.2f} | "
                    f"{m['diffuse']['mean']:.2f} / {m['diffuse']['p95']:.2f} | {t:,.0f} |")
-    out += ["", "| closure level (RGB) | vs 1 nm ground truth, mean / p95 | vs exact RGB model, mean / p95 | evals/s |",
+    out += ["", "| closure level | vs 1 nm ground truth, mean / p95 | vs exact RGB model, mean / p95 | evals/s |",
             "|---|---|---|---|"]
     for name, lv in d["accuracy"]["closure_levels"].items():
         g, r = lv["vs_ground_truth"]["all"], lv["vs_rgb_exact"]["all"]
