@@ -57,3 +57,19 @@ if __name__ == "__main__":
     print(accuracy_tables())
     print()
     print(cost_table())
+
+
+def scene_modes_table(preset: str = "fig6_medium") -> str:
+    """Cost per sample of ``preset`` in every accuracy mode and backend on the realistic scene
+    (``scene_cost.json``): against the same backend's RGB group and Principled + Thin Film."""
+    d = json.loads((HERE / "scene_cost.json").read_text())
+    rows = [r for r in d["cycles"] if r.get("preset") == preset]
+    rgb = {r["backend"]: r["per_sample"]["median"] for r in rows if r["accuracy"] == "rgb"}
+    out = ["| accuracy mode | backend | nodes interpreted | ms / sample | x its RGB | x Principled + Thin Film |",
+           "|---|---|---|---|---|---|"]
+    for r in rows:
+        ms = r["per_sample"]["median"]
+        nodes = f"{r['nodes']:,}" if r.get("nodes") is not None else ""
+        out.append(f"| {r['accuracy']} | {r['backend']} | {nodes} | {ms * 1e3:.0f} | {ms / rgb[r['backend']]:.2f} | "
+                   f"{r['vs_reference']:.2f} |")
+    return "\n".join(out)

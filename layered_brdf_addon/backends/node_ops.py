@@ -295,6 +295,23 @@ class NodeOps:
         """``x``, or 0 where it is NaN: ``Maximum(0, x) + Minimum(0, x)`` (see clamp_input)."""
         return self.maximum(0.0, x) + self.minimum(0.0, x)
 
+    def madd(self, a, b, c):
+        """``a * b + c`` as one Multiply Add node (Math or Vector Math)."""
+        if all(isinstance(v, Number) for v in (a, b, c)):
+            return a * b + c
+        if self._vector_args(a, b, c):
+            n, d = self.node("ShaderNodeVectorMath", {0: self.broadcast(a), 1: self.broadcast(b),
+                                                      2: self.broadcast(c)}, operation="MULTIPLY_ADD")
+            return self.out(n, d, 0, "vector")
+        n, d = self.node("ShaderNodeMath", {0: a, 1: b, 2: c}, operation="MULTIPLY_ADD")
+        return self.out(n, d, 0, "float")
+
+    def power(self, x, p):
+        """``x ** p`` for ``x > 0`` (one Power node)."""
+        if isinstance(x, Number):
+            return x ** p
+        return self.vmath("POWER", x, self.broadcast(p)) if _kind(x) == "vector" else self.math("POWER", x, p)
+
     def footprint(self, x):
         """How much ``x`` changes across the pixel: unknown (SVM has no derivatives of
         arbitrary values), ``None``."""

@@ -274,6 +274,12 @@ class OslOps:
     def triple(self, x, y, z):
         return self.atom(_vector_literal((x, y, z)), "vector")
 
+    def madd(self, a, b, c):
+        return a * b + c
+
+    def power(self, x, p):
+        return self.call_expr("pow", (x, p), _kind(x))
+
     def footprint(self, x):
         """How much ``x`` changes across the pixel: OSL's ``filterwidth`` (from its derivatives)."""
         return self.call_expr("filterwidth", (x,), _kind(x))

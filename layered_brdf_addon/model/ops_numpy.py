@@ -262,6 +262,17 @@ def named(hint, x):
     return x
 
 
+def madd(a, b, c):
+    """``a * b + c`` (a node backend makes it one Multiply Add node)."""
+    return a * b + c
+
+
+@_elementwise
+def power(x, p):
+    """``x ** p`` for ``x > 0``."""
+    return np.power(x, p)
+
+
 def footprint(x):
     """How much ``x`` changes across the pixel: unknown here (no derivatives), ``None``."""
     return None

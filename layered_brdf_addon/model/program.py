@@ -475,23 +475,24 @@ def band_cosine(ops, opd, slope, r1, *, dispersion, footprint=False):
     total = None
     for slot in band_fit()["slots"]:
         neg_b = tuple(-b for b in slot["damping"])
+        two_pi_nu = tuple(2.0 * math.pi * nu for nu in slot["wavenumber"])
         if dispersion:
-            x = opd + slope * rows("index_shift")
-            g = x + slope * rows("index_slope")
+            x = ops.madd(slope, rows("index_shift"), opd)
+            g = ops.madd(slope, rows("index_slope"), x)
             c = slope * rows("index_chirp")
-            den = 1.0 + c * c
+            den = ops.madd(c, c, 1.0)
             arg = g * g * neg_b / den  # -b g^2 / (1 + c^2)
-            half_atan = ops.combine(*(ops.atan2(ck, 1.0) for ck in ops.components(c))) * 0.5
-            phase = x * tuple(2.0 * math.pi * nu for nu in slot["wavenumber"]) + half_atan + arg * c
-            amplitude = tuple(slot["amplitude"]) / ops.sqrt(ops.sqrt(den))
+            atan_c = ops.combine(*(ops.atan2(ck, 1.0) for ck in ops.components(c)))
+            phase = ops.madd(atan_c, 0.5, ops.madd(x, two_pi_nu, arg * c))
+            amplitude = ops.power(den, -0.25) * tuple(slot["amplitude"])
         else:
             arg = opd * opd * neg_b
-            phase = opd * tuple(2.0 * math.pi * nu for nu in slot["wavenumber"])
+            phase = opd * two_pi_nu
             amplitude = tuple(slot["amplitude"])
         if w is not None:
-            arg = arg + w * w * tuple(-(math.pi * nu) ** 2 / 6.0 for nu in slot["wavenumber"])
-        term = ops.exp(arg) * ops.cos(phase) * amplitude
-        total = term if total is None else total + term
+            arg = ops.madd(w * w, tuple(-(math.pi * nu) ** 2 / 6.0 for nu in slot["wavenumber"]), arg)
+        wave = ops.exp(arg) * ops.cos(phase)
+        total = wave * amplitude if total is None else ops.madd(wave, amplitude, total)
     return total
 
 
