@@ -90,9 +90,14 @@ def main():
         ax.scatter(xs, ys, color="tab:blue", zorder=3)
         for x, y, label in pts:
             ax.annotate(label, (x, y), textcoords="offset points", xytext=(5, 5), fontsize=8)
-        front = pareto(pts)
-        ax.plot([pts[k][0] for k in front], [pts[k][1] for k in front], "--", color="tab:orange",
-                label="Pareto front", zorder=2)
+        # One front per backend where there are several (the node group is the only backend for
+        # GPUs without OptiX and for EEVEE, so its own front matters).
+        backends = sorted({label.split(" ")[0] for _, _, label in pts}) if ax is axes[1] else [None]
+        for colour, backend in zip(("tab:orange", "tab:green"), backends):
+            sub = [q for q in pts if backend is None or q[2].split(" ")[0] == backend]
+            front = pareto(sub)
+            ax.plot([sub[k][0] for k in front], [sub[k][1] for k in front], "--", color=colour,
+                    label="Pareto front" + (f" ({backend})" if backend else ""), zorder=2)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel(xlabel)
