@@ -57,3 +57,17 @@ def test_unknown_names_are_rejected():
 def test_round_trip_dict():
     p = preset("fig6_medium")
     assert LayeredParams.from_dict(p.to_dict()) == p
+
+
+def test_every_enum_option_and_preset_has_a_label_for_people():
+    from layered_brdf_addon.model.params import OPTION_LABELS, option_label
+    from layered_brdf_addon.model.presets import PRESET_LABELS, PRESETS, preset_label
+
+    for spec in LayeredParams.specs():
+        if spec.kind == "enum":
+            labels = [option_label(o) for o in spec.options]
+            assert all(o in OPTION_LABELS for o in spec.options), spec.name
+            assert len(set(labels)) == len(labels), spec.name
+    assert set(PRESET_LABELS) == set(PRESETS)
+    assert preset_label("fig3_old_metal") == "Fig. 3 old metal"
+    assert option_label("rgb") == "RGB (the paper's 3 wavelengths)"

@@ -313,6 +313,14 @@ def test_toggling_an_effect_rebuilds_the_tree():
     assert shader_node(mat).inputs["tilt"].default_value == pytest.approx(12.0)
 
 
+def test_menus_show_labels_written_for_people():
+    obj = plain_object()
+    mat = load_preset(obj, "oil_slick")
+    items = properties.settings(mat).bl_rna.properties["accuracy"].enum_items
+    assert items["rgb"].name == "RGB (the paper's 3 wavelengths)" and items["analytic"].name == "Analytic spectral"
+    assert ui.preset_title("fig6_medium") == "Fig. 6 medium layer"
+
+
 def test_a_material_built_before_the_analytic_default_keeps_its_colour_model(tmp_path):
     """'rgb' was the default accuracy: a material built then never wrote it (Blender stores a
     setting once written).  Saved, reopened and edited, it stays RGB; new materials get the

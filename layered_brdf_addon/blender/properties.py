@@ -17,7 +17,7 @@ import bpy
 from bpy.app.handlers import persistent
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
-from ..model.params import PARAM_SPECS, LayeredParams, ParameterError, ParamSpec, iter_sockets
+from ..model.params import PARAM_SPECS, LayeredParams, ParameterError, ParamSpec, iter_sockets, option_label
 from ..model.plan import EffectPlan
 from ..model import policy
 from ..model.policy import plan_effects
@@ -91,13 +91,9 @@ def _updater(name: str):
     return update
 
 
-def _option_label(option: str) -> str:
-    return option.replace("_", " ").title()
-
-
 def _spec_property(spec: ParamSpec):
     if spec.kind == "enum":
-        items = [(o, _option_label(o), f"{spec.label}: {o}") for o in spec.options]
+        items = [(o, option_label(o), f"{spec.label}: {option_label(o)} ('{o}')") for o in spec.options]
         return EnumProperty(name=spec.label, description=spec.description, items=items, default=spec.default,
                             update=_updater(spec.name))
     if spec.kind == "bool":

@@ -8,7 +8,7 @@ from __future__ import annotations
 from bpy.types import Menu, Panel
 
 from ..model.params import PARAM_SPECS
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset_label
 from . import material as M
 from . import osl, properties, user_presets
 
@@ -18,7 +18,7 @@ MAIN_PANEL = "LAYERED_BRDF_PT_material"
 def preset_title(identifier: str) -> str:
     if identifier.startswith(user_presets.USER_PREFIX):
         return identifier[len(user_presets.USER_PREFIX):]
-    return identifier.replace("_", " ").capitalize()
+    return preset_label(identifier)
 
 
 def draw_param(layout, mat, node, spec) -> None:

@@ -98,6 +98,22 @@ LOBES = ("beckmann", "phong")
 BASE_LAYERS = ("none", "transparent")
 ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
 
+# What an artist reads for each option of the enum parameters (menus, CLI help).
+OPTION_LABELS = {
+    "noise": "Noise", "height": "Height (thickens downwards)",
+    "parallel": "Parallel", "tilted": "Tilted", "correlated": "Follows thickness",
+    "beckmann": "Beckmann", "phong": "Phong (OSL only)",
+    "none": "None (your Base Shader)", "transparent": "Transparent (soap film)",
+    "rgb": "RGB (the paper's 3 wavelengths)", "analytic": "Analytic spectral",
+    "spectral4": "Spectral, 4 wavelengths", "spectral8": "Spectral, 8 wavelengths",
+    "spectral16": "Spectral, 16 wavelengths", "spectral32": "Spectral, 32 wavelengths",
+}
+
+
+def option_label(option: str) -> str:
+    """The label of an enum option for people (:data:`OPTION_LABELS`)."""
+    return OPTION_LABELS.get(option, option.replace("_", " ").capitalize())
+
 
 @dataclass
 class LayeredParams:

@@ -56,6 +56,21 @@ for _overrides in PAPER_PRESETS.values():
 PRESETS: dict[str, dict] = {**PAPER_PRESETS, **ARTIST_PRESETS}
 
 
+PRESET_LABELS: dict[str, str] = {
+    "fig3_old_metal": "Fig. 3 old metal", "fig3_thin_film": "Fig. 3 thin film", "fig3_clay": "Fig. 3 clay",
+    "fig4_parallel": "Fig. 4 parallel boundaries", "fig4_tilted": "Fig. 4 tilted boundary",
+    "fig5_correlated": "Fig. 5 boundary follows thickness", "fig6_thin": "Fig. 6 thin layer",
+    "fig6_medium": "Fig. 6 medium layer", "fig6_thick": "Fig. 6 thick layer",
+    "soap_bubble": "Soap bubble", "oil_slick": "Oil slick", "beetle_shell": "Beetle shell",
+    "anodised_titanium": "Anodised titanium", "old_metal": "Old metal", "glazed_clay": "Glazed clay",
+}
+
+
+def preset_label(name: str) -> str:
+    """The preset's name for people (menus, previews)."""
+    return PRESET_LABELS.get(name, name.replace("_", " ").capitalize())
+
+
 def preset(name: str) -> LayeredParams:
     """The validated parameters of a named preset."""
     if name not in PRESETS:
