@@ -313,6 +313,16 @@ def test_toggling_an_effect_rebuilds_the_tree():
     assert shader_node(mat).inputs["tilt"].default_value == pytest.approx(12.0)
 
 
+def test_helper_groups_are_hidden_from_the_add_menu():
+    """The sub-groups the node group uses start with "." (Blender hides those from the Add menu
+    and the group selector); the material's own group does not."""
+    obj = plain_object()
+    mat = load_preset(obj, "fig6_medium")
+    helpers = [g for g in bpy.data.node_groups if g.get(M.SUBGROUP_KEY) is not None]
+    assert helpers and all(g.name.startswith(".") for g in helpers)
+    assert not shader_node(mat).node_tree.name.startswith(".")
+
+
 def test_menus_show_labels_written_for_people():
     obj = plain_object()
     mat = load_preset(obj, "oil_slick")

@@ -146,8 +146,10 @@ def build_into(group, plan: EffectPlan) -> None:
     gin = group.nodes.new("NodeGroupInput")
     gin.location = (-200.0, 0.0)
     gout = group.nodes.new("NodeGroupOutput")
+    # A leading "." keeps the helper groups out of the Add menu and the group selector (Blender's
+    # convention for hidden data); the material's own group stays visible.
     ops = GroupOps(group, gin, x0=200.0, stamp=build_stamp(),
-                   subgroup_name=lambda key: f"{GROUP_PREFIX} part: {key}")
+                   subgroup_name=lambda key: f".{GROUP_PREFIX} part: {key}")
     res = program.layered_surface(ops, plan)
     extras = res.extras
     n0 = extras["upper_normal"]
