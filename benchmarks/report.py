@@ -53,12 +53,6 @@ def cost_table() -> str:
     return "\n".join(out)
 
 
-if __name__ == "__main__":
-    print(accuracy_tables())
-    print()
-    print(cost_table())
-
-
 def scene_modes_table(preset: str = "fig6_medium") -> str:
     """Cost per sample of ``preset`` in every accuracy mode and backend on the realistic scene
     (``scene_cost.json``): against the same backend's RGB group and Principled + Thin Film."""
@@ -73,3 +67,10 @@ def scene_modes_table(preset: str = "fig6_medium") -> str:
         out.append(f"| {r['accuracy']} | {r['backend']} | {nodes} | {ms * 1e3:.0f} | {ms / rgb[r['backend']]:.2f} | "
                    f"{r['vs_reference']:.2f} |")
     return "\n".join(out)
+
+
+if __name__ == "__main__":
+    print(accuracy_tables())
+    print()
+    print(cost_table())
+

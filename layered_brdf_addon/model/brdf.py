@@ -11,7 +11,9 @@ import numpy as np
 
 from .geometry import Z_AXIS
 from .params import WAVELENGTHS_NM
-from .spectral_band import MIN_PATH_COS, channel_cosine
+from . import ops_numpy
+from .program import interference_path
+from .spectral_band import channel_cosine
 
 TWO_PI = 2.0 * np.pi
 
@@ -152,8 +154,7 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
     # Phase, eq. 3, and the total, eq. 5.
     phase = (np.pi * r1 / lam) * (d * (s_i + s_o))  # meaningful where T > 0
     if band:
-        opd = r1 * d * (s_i + s_o)
-        slope = d * (1.0 / np.maximum(s_i, MIN_PATH_COS) + 1.0 / np.maximum(s_o, MIN_PATH_COS))
+        opd, slope = interference_path(ops_numpy, r1, d, s_i, s_o)
         cos2phi = channel_cosine(opd, np.broadcast_to(r1, opd.shape), slope)
     else:
         cos2phi = np.cos(2.0 * phase)

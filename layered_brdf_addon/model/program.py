@@ -423,10 +423,7 @@ def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail
     if interference:
         s_i = ops.sqrt((1.0 - eta2) + eta2 * (cos_ci * cos_ci))
         if band:
-            # Eq. 3 over each channel's band: the path D = r1 d (s_i + s_o) and its slope
-            # dD/dr1 = d (1/s_i + 1/s_o) (r1 s = sqrt(r1^2 - r0^2 sin^2)).
-            opd = r1 * d * (s_i + s_o)
-            slope = d * (1.0 / ops.maximum(s_i, MIN_PATH_COS) + 1.0 / ops.maximum(s_o, MIN_PATH_COS))
+            opd, slope = interference_path(ops, r1, d, s_i, s_o)
             cos2phi = band_cosine(ops, opd, slope, r1, dispersion=dispersion, footprint=footprint)
         else:
             cos2phi = ops.cos((2.0 * math.pi / lam) * r1 * d * (s_i + s_o))  # twice the phase of eq. 3
@@ -447,6 +444,17 @@ def diffuse_rho(ops, r1, r0, lam, d, *, band=False, dispersion=True, footprint=F
     else:
         c = ops.cos((4.0 * math.pi / lam) * r1 * d)
     return ops.maximum(1.0 + c * (2.0 * ops.sqrt(td * (1.0 - td))), 0.0)
+
+
+@shader_function
+def interference_path(ops, r1, d, s_i, s_o):
+    """Eq. 3's optical path difference ``D = r1 d (s_i + s_o)`` (``s``: the refracted
+    cosines) and its slope ``dD/dr1 = d (1/s_i + 1/s_o)`` (``r1 s = sqrt(r1^2 - r0^2
+    sin^2)``), the cosines floored at ``MIN_PATH_COS`` there: the slope only moves the path
+    to first order with the dispersed index (:func:`band_cosine`)."""
+    opd = r1 * d * (s_i + s_o)
+    slope = d * (1.0 / ops.maximum(s_i, MIN_PATH_COS) + 1.0 / ops.maximum(s_o, MIN_PATH_COS))
+    return opd, slope
 
 
 @shader_function

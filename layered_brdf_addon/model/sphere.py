@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import program
-from .brdf import diffuse_rho, specular_brdf
+from .brdf import layered_brdf
 from .geometry import Z_AXIS, dot, safe_normalize
 from .ops_numpy import NoiseUnavailable, ShadingPoint
 from .params import LayeredParams, WAVELENGTHS_NM, iter_sockets
@@ -154,10 +154,7 @@ def exact_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTH
     cos_l = np.maximum(dot(n0, l), 0.0)
     i = np.broadcast_to(-np.asarray(l), np.shape(n0))
     o = np.broadcast_to(np.asarray(v), np.shape(n0))
-    band = params.accuracy == "analytic"
-    fs = specular_brdf(i, o, n0, n1, params.r1, d, params.e0, params.e1, params.r0, wavelengths, ng=n0, band=band)
-    fd = diffuse_rho(params.r1, d, params.r0, wavelengths, band) * np.asarray(params.base_color) / np.pi
-    return cos_l[..., None] * (params.ks * fs + params.kd * fd)
+    return cos_l[..., None] * layered_brdf(i, o, n0, n1, d, params, ng=n0, wavelengths=wavelengths)
 
 
 def render_spheres(params_list, camera: OrthoCamera, sun: Sun, centers=((0.0, 0.0, 0.0),), *,
