@@ -40,7 +40,6 @@ OUT_JSON = RESULTS / "scene_cost.json"
 
 SIZE = 256
 SUBDIV_LEVELS = 2
-HDRIS = ("forest.exr", "courtyard.exr", "studio.exr")  # the first one Blender ships is used
 HDRI_STRENGTH = 1.0
 SUN_STRENGTH = 3.0
 SUN_ROTATION_DEG = (50.0, 0.0, 30.0)
@@ -181,17 +180,10 @@ def interpreted_nodes(tree) -> int:
 
 # --- scene -------------------------------------------------------------------------------------
 def hdri_path() -> Path:
-    """The first of HDRIS among Blender's bundled studio lights."""
-    import bpy
+    """The first of forest, courtyard and studio among Blender's bundled studio lights."""
+    from layered_brdf_addon.blender.lookdev import hdri_path as bundled_hdri
 
-    folder = Path(bpy.utils.system_resource("DATAFILES")) / "studiolights" / "world"
-    for name in HDRIS:
-        if (folder / name).exists():
-            return folder / name
-    found = sorted(folder.glob("*.exr"))
-    if not found:
-        raise FileNotFoundError(f"no studio HDRI in {folder}")
-    return found[0]
+    return bundled_hdri()
 
 
 def build_scene():
@@ -324,10 +316,9 @@ def measure_cycles(obj, variants, samples, reps, log=print) -> list[dict]:
 # --- EEVEE -------------------------------------------------------------------------------------
 def eevee_engine() -> str | None:
     """EEVEE's engine id in this Blender (BLENDER_EEVEE_NEXT in 4.2-4.x, BLENDER_EEVEE again since)."""
-    import bpy
+    from layered_brdf_addon.blender.lookdev import eevee_engine as engine
 
-    ids = {e.identifier for e in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items}
-    return next((e for e in ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT") if e in ids), None)
+    return engine()
 
 
 def measure_eevee(obj, variants, samples, frames, log=print) -> dict:

@@ -1,0 +1,105 @@
+"""The look-development scene: it builds inside the current file, renders a layered preset,
+and removing it leaves the file as it was."""
+from __future__ import annotations
+
+import math
+
+import bpy
+import numpy as np
+import pytest
+
+from layered_brdf_addon.blender import lookdev as L
+from layered_brdf_addon.blender.material import apply_layered_material
+from layered_brdf_addon.blender.scene import render_passes
+from layered_brdf_addon.model.params import ParameterError
+from layered_brdf_addon.model.presets import preset
+
+COLLECTIONS = ("scenes", "objects", "meshes", "cameras", "lights", "worlds", "images", "materials", "node_groups",
+               "collections", "texts")
+SESSION_IMAGES = {"Render Result", "Viewer Node"}  # Blender's own, shared by every render
+
+
+def datablocks() -> dict[str, set[int]]:
+    return {c: {b.as_pointer() for b in getattr(bpy.data, c) if b.name not in SESSION_IMAGES} for c in COLLECTIONS}
+
+
+def test_hdri_path_prefers_forest_and_names_the_choices():
+    assert L.hdri_path().name == "forest.exr" and L.hdri_path().is_file()
+    assert L.hdri_path("courtyard") == L.hdri_path("courtyard.exr") == L.hdri_folder() / "courtyard.exr"
+    with pytest.raises(ParameterError) as e:
+        L.hdri_path("no_such_sky")
+    assert e.value.name == "hdri" and "forest" in str(e.value) and "studio" in str(e.value)
+
+
+def test_bad_options_name_the_parameter_and_create_nothing():
+    before = datablocks()
+    for kwargs, name in [(dict(size=0), "size"), (dict(size=5000), "size"), (dict(samples=0), "samples"),
+                         (dict(engine="LUXCORE"), "engine"), (dict(hdri="mars"), "hdri"),
+                         (dict(view_transform="Filmic Ultra"), "view_transform")]:
+        with pytest.raises(ParameterError) as e:
+            L.build_lookdev_scene(**kwargs)
+        assert e.value.name == name, kwargs
+    assert datablocks() == before
+
+
+def test_scene_settings_and_the_ball():
+    scene, ball = L.build_lookdev_scene(size=48, samples=3)
+    try:
+        assert scene is not bpy.context.scene and scene.camera is not None
+        assert scene.render.engine == "CYCLES" and scene.cycles.device == "CPU"
+        assert (scene.render.resolution_x, scene.render.resolution_y) == (48, 48)
+        assert scene.cycles.samples == 3 and not scene.cycles.use_denoising and not scene.cycles.use_adaptive_sampling
+        assert scene.render.threads_mode == "FIXED" and scene.render.threads == 2
+        assert scene.view_settings.view_transform == "AgX" and scene.view_settings.look == "None"
+        env = [n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeTexEnvironment"]
+        assert len(env) == 1 and env[0].image.filepath.endswith("forest.exr")
+        assert any(o.type == "LIGHT" and o.data.type == "SUN" and o.data.angle > 0 for o in scene.objects)
+        assert len(ball.material_slots) == 1 and ball.material_slots[0].material is None
+        assert all(p.use_smooth for p in ball.data.polygons)
+        # a unit ball with a groove: radii from the centre between 1 - depth and 1
+        co = np.empty(len(ball.data.vertices) * 3)
+        ball.data.vertices.foreach_get("co", co)
+        r = np.linalg.norm(co.reshape(-1, 3), axis=1)
+        assert math.isclose(r.max(), 1.0, abs_tol=1e-6) and math.isclose(r.min(), 1.0 - L.GROOVE_DEPTH, abs_tol=1e-3)
+        eevee, _ = L.build_lookdev_scene(size=16, samples=1, engine="BLENDER_EEVEE", view_transform="Standard")
+        assert eevee.render.engine == L.eevee_engine() and eevee.view_settings.view_transform == "Standard"
+        L.remove_scene(eevee)
+    finally:
+        L.remove_scene(scene)
+
+
+@pytest.mark.slow
+def test_renders_a_layered_preset_and_leaves_no_datablocks_behind():
+    before = datablocks()
+    scene, ball = L.build_lookdev_scene(size=32, samples=2)
+    mat = apply_layered_material(ball, preset("oil_slick"), "nodes")
+    beauty = render_passes(scene).beauty
+    assert beauty.shape == (32, 32, 3) and np.all(np.isfinite(beauty))
+    centre = beauty[10:22, 10:22].mean(axis=(0, 1))
+    assert centre.sum() > 0.05  # the lit ball fills the middle of the frame
+    added = {c: datablocks()[c] - before[c] for c in COLLECTIONS}
+    assert added["scenes"] and added["objects"] and added["worlds"] and added["images"]
+    L.remove_scene(scene)
+    left = {c: datablocks()[c] - before[c] for c in COLLECTIONS}
+    # only what the caller made is left: the material applied to the ball and its node groups
+    assert left["materials"] == {mat.as_pointer()}
+    assert all(not left[c] for c in COLLECTIONS if c not in ("materials", "node_groups"))
+    bpy.data.materials.remove(mat)
+
+
+def test_principled_thin_film_equivalent_of_a_preset():
+    p = preset("anodised_titanium")
+    kw = L.thin_film_equivalent("anodised_titanium", p)
+    assert kw["thickness_nm"] == pytest.approx((p.d_min + p.d_max) / 2) and kw["ior"] == p.r1_g
+    assert kw["metallic"] == 1.0 and tuple(kw["base_color"]) == p.base_color
+    assert kw["roughness"] == pytest.approx(math.sqrt(math.sqrt(2.0 / (p.e0 + 2.0))))
+    assert L.thin_film_equivalent("oil_slick", preset("oil_slick"))["metallic"] == 0.0
+    mat = L.principled_thin_film("TF", **kw)
+    bsdf = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    assert bsdf.inputs["Thin Film Thickness"].default_value == pytest.approx(kw["thickness_nm"])
+    assert bsdf.inputs["Thin Film IOR"].default_value == pytest.approx(kw["ior"])
+    assert bsdf.inputs["Metallic"].default_value == 1.0
+    assert bsdf.inputs["Roughness"].default_value == pytest.approx(kw["roughness"])
+    with pytest.raises(ParameterError) as e:
+        L.principled_thin_film("bad", -1.0, 1.3, (0.5, 0.5, 0.5), 0.0, 0.2)
+    assert e.value.name == "thickness_nm"
