@@ -1,27 +1,78 @@
-"""The layered node groups as Asset Browser assets, with a rendered preview.
+"""Layered materials as Asset Browser assets: *looks*, one material per preset.
 
-Blender renders no previews of node groups (``ID.asset_generate_preview`` does nothing
-for them), so the preview is a small Cycles render of a sphere carrying the group in a
-temporary scene, written into the group's preview image.
+A look is a material carrying a preset's values (its node group embedded, as in any
+material), marked as an asset with a name for people (``Anodised titanium``), a
+description, the author, tags, a catalog (:data:`CATALOGS`, written to the library's
+``blender_assets.cats.txt`` by :mod:`.asset_library`) and a preview rendered on the
+look-development shader ball (:mod:`.lookdev`).  Blender renders no previews in
+background mode, so the preview is a small Cycles render whose pixels are written into
+the material's preview image.
+
+The node groups the add-on builds are never assets: older versions marked them (with a
+fake user and the catalog :data:`LEGACY_CATALOG_ID`); :func:`release_node_groups` takes
+that mark off the add-on's groups (recognised by their stamp) and leaves every other
+data-block alone.
 """
 from __future__ import annotations
 
 import os
 import tempfile
+import uuid
+from dataclasses import dataclass
 
 import bpy
+from bpy.app.handlers import persistent
 
-from ..model.plan import EffectPlan
-from . import material as M
+from ..model.params import LayeredParams, ParameterError
+from ..model.policy import plan_effects
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset_label
 from ..backends import node_group as node_group_builder
+from . import material as M
+from . import user_presets
 from .scene import render_to_file
 
-CATALOG_ID = "4b0f3f52-5d0c-4c55-9d2e-6b8d1c1f7a21"  # "Layered BRDF"
-CATALOG_PATH = "Layered BRDF"
-AUTHOR = "layered-brdf"
-BASE_TAGS = ("Layered BRDF", "iridescent", "thin film", "shader")
-PREVIEW_KEY = "layered_brdf_preview"  # build stamp of the group the preview shows
-PREVIEW_SIZE = 64
+AUTHOR = "Layered BRDF add-on (Granier & Heidrich 2003 model)"
+LICENSE = "Same as the layered-brdf add-on"
+BASE_TAGS = ("Layered BRDF", "iridescent", "thin film")
+PREVIEW_SIZE = 128  # pixels, the size of Blender's own asset previews
+PREVIEW_SAMPLES = 8
+PREVIEW_SIZE_RANGE = (8, 512)
+PREVIEW_SAMPLES_RANGE = (1, 4096)
+
+
+@dataclass(frozen=True)
+class Catalog:
+    """One asset catalog: a stable UUID, its path in the Asset Browser and Blender's simple name."""
+
+    uuid: str
+    path: str
+
+    @property
+    def simple_name(self) -> str:
+        return self.path.replace("/", "-")
+
+    def line(self) -> str:
+        """The catalog as a line of ``blender_assets.cats.txt``."""
+        return f"{self.uuid}:{self.path}:{self.simple_name}"
+
+
+def _catalog(path: str) -> Catalog:
+    # Derived from the path, so every library (and every version of the add-on) uses the same UUIDs.
+    return Catalog(str(uuid.uuid5(uuid.NAMESPACE_URL, "https://layered-brdf/asset-catalog/" + path)), path)
+
+
+ROOT_CATALOG = _catalog("Layered BRDF")
+CATALOGS = {
+    "artist": _catalog("Layered BRDF/Artist looks"),
+    "paper": _catalog("Layered BRDF/Paper figures"),
+    "user": _catalog("Layered BRDF/User presets"),
+}
+KIND_TAGS = {"artist": "artist look", "paper": "paper figure", "user": "user preset"}
+
+# What versions before looks put on the add-on's node groups (taken off by release_node_groups).
+LEGACY_CATALOG_ID = "4b0f3f52-5d0c-4c55-9d2e-6b8d1c1f7a21"
+LEGACY_AUTHOR = "layered-brdf"
+LEGACY_PREVIEW_KEY = "layered_brdf_preview"
 
 _queued: set[str] = set()
 # The timer functions this module registered, kept across importlib.reload (which re-runs this
@@ -29,141 +80,203 @@ _queued: set[str] = set()
 _timers: list = globals().get("_timers", [])
 
 
-def group_of(mat):
-    """The node group behind ``mat``'s layered shader (None with the OSL backend)."""
-    node = M.shader_node(mat)
-    if node is None or node.bl_idname != "ShaderNodeGroup":
+# --- looks: names, catalogs, metadata ----------------------------------------------------------
+def kind_of(identifier: str) -> str:
+    """``"paper"``, ``"artist"`` or ``"user"``: the catalog of a preset identifier."""
+    if identifier in PAPER_PRESETS:
+        return "paper"
+    if identifier in ARTIST_PRESETS:
+        return "artist"
+    if identifier.startswith(user_presets.USER_PREFIX):
+        return "user"
+    raise ParameterError("preset", identifier, "one of " + ", ".join(PRESETS) + " or 'user:<name>'")
+
+
+def look_name(identifier: str) -> str:
+    """The asset's name: the preset's name for people (a user preset's own name)."""
+    if kind_of(identifier) == "user":
+        return identifier[len(user_presets.USER_PREFIX):]
+    return preset_label(identifier)
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.3g}"
+
+
+def describe_look(name: str, params: LayeredParams, kind: str) -> str:
+    """The asset description: what the look is, its main values and how to edit it."""
+    plan = plan_effects(params)
+    origin = {"paper": "a figure of Granier & Heidrich's layered RGB BRDF paper (2003)",
+              "artist": "an artist preset of the Layered BRDF add-on",
+              "user": "a Layered BRDF material"}[kind]
+    indices = "/".join(_fmt(v) for v in (params.r1_r, params.r1_g, params.r1_b))
+    return (f"{name}: {origin}. Layer {_fmt(params.d_min)}-{_fmt(params.d_max)} nm thick "
+            f"({params.thickness_mode}), index {indices} (R/G/B), ks {_fmt(params.ks)}, kd {_fmt(params.kd)}; "
+            + "; ".join(plan.describe())
+            + ". Drop it on an object, then edit it in Properties > Material > Layered BRDF.")
+
+
+def look_tags(params: LayeredParams, kind: str) -> list[str]:
+    tags = [*BASE_TAGS, KIND_TAGS[kind], f"{params.thickness_mode} thickness", f"{params.normal_mode} boundary"]
+    if params.kd == 0.0:
+        tags.append("no diffuse")
+    if params.base_layer != "none":
+        tags.append(f"{params.base_layer} base")
+    return tags
+
+
+def is_look(mat) -> bool:
+    """Whether ``mat`` is an asset in one of the add-on's catalogs."""
+    data = getattr(mat, "asset_data", None)
+    return data is not None and data.catalog_id in {c.uuid for c in CATALOGS.values()} | {ROOT_CATALOG.uuid}
+
+
+def _params_of(mat) -> LayeredParams:
+    from . import properties
+
+    return properties.params_of(mat)
+
+
+def identifier_of(mat) -> str | None:
+    """The preset ``mat`` shows: its last loaded preset while its values are still that preset's."""
+    from . import properties
+
+    current = properties.settings(mat).preset
+    if not current:
         return None
-    return node.node_tree
-
-
-def mark_group(group, plan: EffectPlan) -> None:
-    """Mark ``group`` as an asset with description, tags, author and catalog (idempotent)."""
-    if group.asset_data is None:
-        group.asset_mark()
-    data = group.asset_data
-    data.description = "Layered BRDF (Granier & Heidrich 2003) for Cycles and EEVEE: " + "; ".join(plan.describe())
-    data.author = AUTHOR
-    data.catalog_id = CATALOG_ID
-    names = {t.name for t in data.tags}
-    for tag in (*BASE_TAGS, f"plan {plan.key}"):
-        if tag not in names:
-            data.tags.new(tag)
-
-
-def preview_current(group) -> bool:
-    return group.preview is not None and group.get(PREVIEW_KEY) == _preview_stamp(group)
-
-
-def _preview_stamp(group) -> str:
-    return f"{group.get(node_group_builder.STAMP_KEY)}|{group.get(node_group_builder.PLAN_KEY)}"
-
-
-def publish(mat, plan: EffectPlan, preview: bool = True):
-    """Mark ``mat``'s node group as an asset; render its preview now (``preview``) or when idle."""
-    group = group_of(mat)
-    if group is None:
-        return None
-    mark_group(group, plan)
-    if not preview_current(group):
-        if preview and not bpy.app.is_job_running("RENDER"):
-            render_preview(group)
-        else:
-            queue_preview(group)
-    return group
-
-
-def _sphere_mesh(name):
-    import bmesh
-
-    mesh = bpy.data.meshes.new(name)
-    bm = bmesh.new()
-    bmesh.ops.create_uvsphere(bm, u_segments=48, v_segments=24, radius=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
-    mesh.shade_smooth()
-    return mesh
-
-
-def render_preview(group, size: int = PREVIEW_SIZE) -> None:
-    """Render a sphere carrying ``group`` with its default inputs into the group's preview."""
-    import numpy as np
-    from mathutils import Vector
-
-    name = "layered_brdf_preview"
-    created = []
-    scene = bpy.data.scenes.new(name)
-    created.append(scene)
-    tmpdir = tempfile.mkdtemp(prefix="layered_brdf_preview_")
-    path = os.path.join(tmpdir, "preview.png")
     try:
-        mesh = _sphere_mesh(name)
-        mat = bpy.data.materials.new(name)
-        created += [mesh, mat]
-        tree = mat.node_tree
-        tree.nodes.clear()
-        node = tree.nodes.new("ShaderNodeGroup")
-        node.node_tree = group
-        out = tree.nodes.new("ShaderNodeOutputMaterial")
-        tree.links.new(node.outputs["BSDF"], out.inputs["Surface"])
-        mesh.materials.append(mat)
-        sphere = bpy.data.objects.new(name, mesh)
-        cam_data = bpy.data.cameras.new(name)
-        cam_data.type = "ORTHO"
-        cam_data.ortho_scale = 2.1
-        cam = bpy.data.objects.new(name + "_camera", cam_data)
-        cam.location = (0.0, -5.0, 0.0)
-        cam.rotation_euler = (1.5707963, 0.0, 0.0)
-        sun_data = bpy.data.lights.new(name, "SUN")
-        sun_data.energy = 3.0
-        sun_data.angle = 0.05
-        sun = bpy.data.objects.new(name + "_sun", sun_data)
-        sun.rotation_mode = "QUATERNION"
-        sun.rotation_quaternion = Vector((0.45, -1.0, 0.55)).to_track_quat("Z", "Y")
-        world = bpy.data.worlds.new(name)
-        world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.06, 0.06, 0.07, 1.0)
-        created += [sphere, cam_data, cam, sun_data, sun, world]
-        for obj in (sphere, cam, sun):
-            scene.collection.objects.link(obj)
-        scene.camera = cam
-        scene.world = world
+        wanted = user_presets.preset_params(current)
+        kind_of(current)
+    except ParameterError:
+        return None
+    return current if _same_values(_params_of(mat), wanted) else None
+
+
+def _same_values(a: LayeredParams, b: LayeredParams) -> bool:
+    da, db = a.to_dict(), b.to_dict()
+    for key, value in db.items():
+        other = da.get(key)
+        if isinstance(value, float):
+            if not isinstance(other, float) or abs(other - value) > 1e-5 * max(1.0, abs(value)):
+                return False
+        elif other != value:
+            return False
+    return True
+
+
+def mark_look(mat, identifier: str | None = None):
+    """Mark ``mat`` (a layered material) as an asset with description, author, tags and catalog.
+
+    ``identifier`` is the preset the material carries (the catalog follows it); by default the
+    material's own preset while it still has that preset's values (:func:`identifier_of`), else
+    the *User presets* catalog.  Idempotent: the tags are replaced, the preview is kept."""
+    if M.shader_node(mat) is None or not mat.get(M.MATERIAL_KEY):
+        raise ParameterError("material", mat.name, "a layered material (apply the Layered BRDF first)")
+    if mat.library is not None:
+        raise ParameterError("material", mat.name, f"a local material (it is linked from {mat.library.filepath})")
+    if identifier is None:
+        identifier = identifier_of(mat)
+    kind = kind_of(identifier) if identifier is not None else "user"
+    params = _params_of(mat)
+    if mat.asset_data is None:
+        mat.asset_mark()
+    data = mat.asset_data
+    data.description = describe_look(mat.name, params, kind)
+    data.author = AUTHOR
+    data.license = LICENSE
+    data.catalog_id = CATALOGS[kind].uuid
+    while len(data.tags):
+        data.tags.remove(data.tags[0])
+    for tag in dict.fromkeys(look_tags(params, kind)):
+        data.tags.new(tag, skip_if_exists=True)
+    return mat
+
+
+# --- previews ------------------------------------------------------------------------------------
+def check_preview_options(size, samples) -> tuple[int, int]:
+    """``size`` and ``samples`` as integers in their ranges; ParameterError naming the parameter."""
+    for name, value, (lo, hi) in (("preview_size", size, PREVIEW_SIZE_RANGE),
+                                  ("samples", samples, PREVIEW_SAMPLES_RANGE)):
+        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+            raise ParameterError(name, value, f"an integer in [{lo}, {hi}]")
+    return size, samples
+
+
+def render_previews(materials, size: int | None = None, samples: int | None = None,
+                    hdri: str | None = None) -> list[float]:
+    """Render each of ``materials`` on the look-development shader ball (under a bundled HDRI,
+    transparent background) and write the pixels into its preview.  One scene serves them all
+    and is removed afterwards.  Returns the seconds each render took."""
+    import time
+
+    import numpy as np
+
+    from . import lookdev
+
+    size, samples = check_preview_options(PREVIEW_SIZE if size is None else size,
+                                          PREVIEW_SAMPLES if samples is None else samples)
+    materials = list(materials)
+    if not materials:
+        return []
+    scene, ball = lookdev.build_lookdev_scene(size=size, samples=samples, hdri=hdri)
+    seconds = []
+    try:
         r = scene.render
-        r.engine = "CYCLES"
-        r.resolution_x = r.resolution_y = size
-        r.resolution_percentage = 100
-        r.film_transparent = True
-        r.threads_mode = "FIXED"
-        r.threads = 2
+        r.film_transparent = True  # the preview shows the ball (and its pedestal) on a clear background
         r.image_settings.file_format = "PNG"
         r.image_settings.color_mode = "RGBA"
-        scene.view_settings.view_transform = "Standard"
-        c = scene.cycles
-        c.device = "CPU"
-        c.samples = 4
-        c.use_adaptive_sampling = False
-        c.use_denoising = False
-        c.max_bounces = 1
-        render_to_file(path, scene)
-        image = bpy.data.images.load(path)
-        created.append(image)
-        pixels = np.empty(size * size * 4, dtype=np.float32)
-        image.pixels.foreach_get(pixels)
-        preview = group.preview_ensure()
-        preview.image_size = (size, size)
-        preview.image_pixels_float.foreach_set(pixels)
-        group[PREVIEW_KEY] = _preview_stamp(group)
+        r.image_settings.color_depth = "8"
+        slot = ball.material_slots[0]
+        with tempfile.TemporaryDirectory(prefix="layered_brdf_preview_") as tmp:
+            path = os.path.join(tmp, "preview.png")
+            for mat in materials:
+                slot.material = mat
+                t0 = time.perf_counter()
+                render_to_file(path, scene)
+                image = bpy.data.images.load(path, check_existing=False)
+                try:
+                    pixels = np.empty(size * size * 4, dtype=np.float32)
+                    image.pixels.foreach_get(pixels)
+                finally:
+                    bpy.data.images.remove(image)
+                preview = mat.preview_ensure()
+                preview.image_size = (size, size)
+                preview.image_pixels_float.foreach_set(pixels)
+                seconds.append(time.perf_counter() - t0)
+        slot.material = None
     finally:
-        bpy.data.batch_remove(created)
-        if os.path.exists(path):
-            os.remove(path)
-        os.rmdir(tmpdir)
+        lookdev.remove_scene(scene)
+    return seconds
 
 
-def queue_preview(group) -> None:
-    """Render ``group``'s preview when Blender is idle (interactive sessions only)."""
+def publish(mat, preview: bool = True, identifier: str | None = None, size: int | None = None,
+            samples: int | None = None):
+    """Mark ``mat`` as a look (:func:`mark_look`) and render its preview now (``preview``; when a
+    render is running it is queued for when Blender is idle, interactive sessions only)."""
+    if size is not None or samples is not None:
+        check_preview_options(PREVIEW_SIZE if size is None else size, PREVIEW_SAMPLES if samples is None else samples)
+    mark_look(mat, identifier)
+    if preview and not bpy.app.is_job_running("RENDER"):
+        render_previews([mat], size, samples)
+    else:
+        queue_preview(mat)
+    return mat
+
+
+def refresh(mat, preview: bool) -> None:
+    """After ``mat`` was (re)built: its preview follows its new values when it is a look
+    (rendered now with ``preview``, else queued), and older versions' asset marks come off
+    the add-on's node groups."""
+    release_node_groups()
+    if is_look(mat) and mat.library is None:
+        publish(mat, preview=preview, identifier=identifier_of(mat))
+
+
+def queue_preview(mat) -> None:
+    """Render ``mat``'s preview when Blender is idle (interactive sessions only)."""
     if bpy.app.background:
         return
-    _queued.add(group.name)
+    _queued.add(mat.name)
     if not bpy.app.timers.is_registered(_render_queued):
         bpy.app.timers.register(_render_queued, first_interval=0.5)
         if _render_queued not in _timers:
@@ -173,10 +286,11 @@ def queue_preview(group) -> None:
 def _render_queued():
     if bpy.app.is_job_running("RENDER"):
         return 2.0
-    while _queued:
-        group = bpy.data.node_groups.get(_queued.pop())
-        if group is not None and group.library is None and not preview_current(group):
-            render_preview(group)
+    mats = [bpy.data.materials.get(name) for name in sorted(_queued)]
+    _queued.clear()
+    mats = [m for m in mats if m is not None and m.library is None and is_look(m)]
+    if mats:
+        render_previews(mats)
     return None
 
 
@@ -187,3 +301,46 @@ def cancel_queued() -> None:
         if bpy.app.timers.is_registered(fn):
             bpy.app.timers.unregister(fn)
     _timers.clear()
+
+
+# --- the add-on's node groups are not assets -----------------------------------------------------
+def group_of(mat):
+    """The node group behind ``mat``'s layered shader (None with the OSL backend)."""
+    node = M.shader_node(mat)
+    if node is None or node.bl_idname != "ShaderNodeGroup":
+        return None
+    return node.node_tree
+
+
+def _own_group(group) -> bool:
+    return group.library is None and (group.get(node_group_builder.STAMP_KEY) is not None
+                                      or group.get(M.SUBGROUP_KEY) is not None)
+
+
+def _legacy_mark(group) -> bool:
+    data = group.asset_data
+    return data is not None and (data.catalog_id == LEGACY_CATALOG_ID or data.author == LEGACY_AUTHOR)
+
+
+def release_node_groups() -> list[str]:
+    """Take the asset mark (and the fake user it brought) that older versions put on the
+    add-on's node groups off them.  Only local groups stamped by the add-on and marked the way
+    it marked them are changed; a mark the artist made is kept.  Returns the names released."""
+    released = []
+    for group in bpy.data.node_groups:
+        if not _own_group(group):
+            continue
+        if _legacy_mark(group):
+            group.asset_clear()
+            group.use_fake_user = False
+            released.append(group.name)
+        if LEGACY_PREVIEW_KEY in group:
+            del group[LEGACY_PREVIEW_KEY]
+    return released
+
+
+@persistent
+def on_version_update(*_args):
+    """A file just loaded: its add-on node groups marked as assets by an older version are released."""
+    release_node_groups()
+

@@ -1,15 +1,16 @@
-"""Operators: thin wrappers over the functions of ``properties``, ``user_presets`` and ``assets``.
+"""Operators: thin wrappers over the functions of ``properties``, ``user_presets``, ``assets`` and
+``asset_library``.
 
 A ParameterError (an invalid value, a linked material, a bad preset file) is reported
 as an error and the operator is cancelled with nothing changed.
 """
 from __future__ import annotations
 
-from bpy.props import StringProperty
+from bpy.props import BoolProperty, IntProperty, StringProperty
 from bpy.types import Operator
 
 from ..model.params import ParameterError
-from . import assets, osl, properties, user_presets
+from . import asset_library, assets, osl, properties, user_presets
 
 
 def _object_with_materials(context):
@@ -137,22 +138,62 @@ class LAYERED_BRDF_OT_delete_preset(_Reporting, Operator):
 
 
 class LAYERED_BRDF_OT_mark_asset(_Reporting, Operator):
-    """Mark the material's node group as an asset with a rendered preview, for the Asset Browser"""
+    """Mark the layered material as an asset (a look) with a rendered preview, for the Asset Browser"""
 
     bl_idname = "layered_brdf.mark_asset"
-    bl_label = "Mark Node Group as Asset"
+    bl_label = "Mark Material as Asset"
     bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
     def poll(cls, context):
         mat = _layered_material(context)
-        return mat is not None and assets.group_of(mat) is not None
+        return mat is not None and mat.library is None
 
     def run(self, context):
         mat = _layered_material(context)
-        _, _, plan = properties.desired(mat)
-        group = assets.publish(mat, plan, preview=True)
-        return f"Node group '{group.name}' is an asset"
+        properties.desired(mat)  # a material that can be built (else ParameterError, nothing changes)
+        assets.publish(mat, preview=True)
+        catalog = next(c.path for c in assets.CATALOGS.values() if c.uuid == mat.asset_data.catalog_id)
+        return f"Material '{mat.name}' is an asset in the catalog '{catalog}'"
+
+
+class LAYERED_BRDF_OT_build_asset_library(_Reporting, Operator):
+    """Write every preset as a material asset with a preview into a folder (a .blend and its catalogs), \
+for the Asset Browser; optionally add the folder to Preferences > File Paths > Asset Libraries"""
+
+    bl_idname = "layered_brdf.build_asset_library"
+    bl_label = "Build Looks Library"
+    bl_options = {"REGISTER"}
+
+    directory: StringProperty(name="Folder", subtype="DIR_PATH",
+                              description="The library folder: 'Layered BRDF Looks.blend' and "
+                                          "'blender_assets.cats.txt' are written there")
+    include_user_presets: BoolProperty(name="Include User Presets", default=True,
+                                       description="Also write your saved presets (catalog 'User presets')")
+    register_library: BoolProperty(name="Add to Asset Libraries", default=True,
+                                   description="Add the folder in Preferences > File Paths > Asset Libraries")
+    preview_size: IntProperty(name="Preview Size", default=assets.PREVIEW_SIZE, min=0,
+                              max=assets.PREVIEW_SIZE_RANGE[1],
+                              description="Preview size in pixels (0: no previews)")
+    samples: IntProperty(name="Preview Samples", default=assets.PREVIEW_SAMPLES,
+                         min=assets.PREVIEW_SAMPLES_RANGE[0], max=assets.PREVIEW_SAMPLES_RANGE[1],
+                         description="Cycles samples per preview pixel")
+
+    def invoke(self, context, event):
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
+    def run(self, context):
+        if not self.directory:
+            raise ParameterError("directory", self.directory, "a folder path")
+        presets = asset_library.default_presets(include_user=self.include_user_presets)
+        result = asset_library.write_asset_library(self.directory, presets, preview_size=self.preview_size,
+                                                   samples=self.samples)
+        message = f"{len(result.assets)} looks written to {result.blend}"
+        if self.register_library:
+            lib, added = asset_library.register_library(result.directory)
+            message += f"; asset library '{lib.name}' " + ("added to the Preferences" if added else "already listed")
+        return message
 
 
 class LAYERED_BRDF_OT_upgrade(_Reporting, Operator):

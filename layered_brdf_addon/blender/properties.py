@@ -262,7 +262,7 @@ def _apply(target, params: LayeredParams, backend: str, plan: EffectPlan, previe
     mat = M.apply_layered_material(target, params, backend, plan=plan)
     write_settings(mat, params, backend)
     mat[SYNC_KEY] = _signature(mat, params, backend, plan)
-    assets.publish(mat, plan, preview=preview)
+    assets.refresh(mat, preview=preview)  # a look's preview follows it; node groups are never assets
     return mat
 
 

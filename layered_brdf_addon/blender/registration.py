@@ -1,4 +1,4 @@
-"""Registering the add-on: one list of classes, one property on materials, two handlers."""
+"""Registering the add-on: one list of classes, one property on materials, three handlers."""
 from __future__ import annotations
 
 import bpy
@@ -14,6 +14,7 @@ CLASSES = (
     operators.LAYERED_BRDF_OT_save_preset,
     operators.LAYERED_BRDF_OT_delete_preset,
     operators.LAYERED_BRDF_OT_mark_asset,
+    operators.LAYERED_BRDF_OT_build_asset_library,
     operators.LAYERED_BRDF_OT_upgrade,
     operators.LAYERED_BRDF_OT_enable_osl,
     operators.LAYERED_BRDF_OT_param_info,
@@ -28,6 +29,7 @@ def _handlers():
     return (
         (bpy.app.handlers.depsgraph_update_post, properties.on_depsgraph_update),
         (bpy.app.handlers.load_post, properties.on_load_post),
+        (bpy.app.handlers.version_update, assets.on_version_update),  # older versions' asset marks off
     )
 
 

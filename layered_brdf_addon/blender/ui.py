@@ -10,7 +10,7 @@ from bpy.types import Menu, Panel
 from ..model.params import PARAM_SPECS
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset_label
 from . import material as M
-from . import osl, properties, user_presets
+from . import assets, osl, properties, user_presets
 
 MAIN_PANEL = "LAYERED_BRDF_PT_material"
 
@@ -54,6 +54,7 @@ def draw_material(layout, context) -> None:
     if not properties.is_layered(mat):
         layout.operator("layered_brdf.apply", icon="SHADING_RENDERED")
         layout.menu(LAYERED_BRDF_MT_presets.__name__, text="Apply a Preset", icon="PRESET")
+        draw_asset_row(layout, None)
         return
     st = properties.settings(mat)
     row = layout.row(align=True)
@@ -72,8 +73,8 @@ def draw_material(layout, context) -> None:
         _alert(layout, problem)
     row = layout.row(align=True)
     row.operator("layered_brdf.apply", text="Rebuild", icon="FILE_REFRESH")
-    row.operator("layered_brdf.mark_asset", text="Mark Asset", icon="ASSET_MANAGER")
     row.operator("layered_brdf.remove", text="", icon="X")
+    draw_asset_row(layout, mat)
     displaced = M.displaced_material(mat)
     if displaced is not None:
         layout.label(text=f"Remove puts '{displaced.name}' back in the slot", icon="INFO")
@@ -85,6 +86,16 @@ def draw_material(layout, context) -> None:
         col.label(text=f"Effects ({plan.key}):")
         for line in plan.describe():
             col.label(text=line, icon="DOT")
+
+
+def draw_asset_row(layout, mat) -> None:
+    """The Asset Browser: mark the layered material as an asset (a look), build the looks library."""
+    row = layout.row(align=True)
+    if mat is not None:
+        text = "Update Asset" if assets.is_look(mat) else "Mark Material as Asset"
+        row.operator("layered_brdf.mark_asset", text=text, icon="ASSET_MANAGER")
+    row.operator("layered_brdf.build_asset_library", text="Build Looks Library..." if mat is None else "",
+                 icon="ASSET_MANAGER" if mat is None else "FILE_FOLDER")
 
 
 class LAYERED_BRDF_PT_material(Panel):
