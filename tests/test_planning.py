@@ -23,9 +23,9 @@ EXPECTED = {
     "fig6_thick": (True, True, "noise", "tilted", True),
     "soap_bubble": (True, False, "height", "parallel", False),
     "oil_slick": (True, True, "noise", "parallel", True),
-    "beetle_shell": (True, True, "noise", "tilted", True),
-    "anodised_titanium": (True, True, "noise", "parallel", True),
-    "old_metal": (True, True, "noise", "parallel", False),
+    "beetle_shell": (True, True, "noise", "parallel", True),
+    "anodised_titanium": (True, False, "noise", "parallel", True),
+    "old_metal": (True, False, "noise", "parallel", True),
     "glazed_clay": (True, True, "noise", "parallel", False),
 }
 

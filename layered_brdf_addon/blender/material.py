@@ -9,6 +9,7 @@ from ..model.params import ParameterError, LayeredParams, iter_sockets
 from ..model.plan import EffectPlan
 from ..model import policy
 from ..model.policy import plan_effects
+from ..model.base_layers import base_node
 from . import osl as osl_backend
 from ..backends import node_group as node_group_builder
 from ..backends.osl_shader import SOCKET_NAMES
@@ -249,14 +250,15 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
     if old is not None:
         _restore_animation(mat, stashed, node, old_inputs)
     base_in = _socket(node.inputs, "Base Shader")
-    if params.base_layer == "transparent" and base_in is not None and not base_in.is_linked:
-        tr = tree.nodes.new("ShaderNodeBsdfTransparent")
-        tr.name = tr.label = f"{OWN_PREFIX} base"
-        tr.location = (node.location[0] - 250, node.location[1] - 300)
+    spec = base_node(params)
+    if spec is not None and base_in is not None and not base_in.is_linked:
+        base = tree.nodes.new(spec.node_type)
+        base.name = base.label = f"{OWN_PREFIX} {spec.label}"
+        base.location = (node.location[0] - 250, node.location[1] - 300)
         if parent is not None:
-            tr.parent = parent
-        _stamp(tr, "base")
-        tree.links.new(tr.outputs[0], base_in)
+            base.parent = parent
+        _stamp(base, "base")
+        tree.links.new(base.outputs[0], base_in)
     for k, (aov_name, socket_name, kind) in enumerate(((AOV_THICKNESS, "Thickness", "Value"),
                                                        (AOV_LOWER_NORMAL, "Lower Normal", "Color"),
                                                        (AOV_UPPER_NORMAL, "Upper Normal", "Color"))):
@@ -490,10 +492,25 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
         remove_unused_own_data()
     _repair(mat, node)
     set_inputs(node, params)
+    _set_base_inputs(node, params)
     mat["layered_brdf_backend"] = backend
     mat["layered_brdf_enums"] = {"thickness_mode": params.thickness_mode, "normal_mode": params.normal_mode,
                                  "lobe": params.lobe, "base_layer": params.base_layer, "accuracy": params.accuracy}
     return mat
+
+
+def _set_base_inputs(node, params: LayeredParams) -> None:
+    """Write the values of the add-on's base node (a metal's colour and roughness follow the
+    parameters) when the add-on's own base node feeds ``node``'s Base Shader input."""
+    spec = base_node(params)
+    base_in = _socket(node.inputs, "Base Shader")
+    if spec is None or base_in is None:
+        return
+    for link in base_in.links:
+        base = link.from_node
+        if base.get(ROLE_KEY) == "base" and base.bl_idname == spec.node_type:
+            for name, value in spec.inputs.items():
+                base.inputs[name].default_value = value
 
 
 def _node_current(node, backend, plan) -> bool:

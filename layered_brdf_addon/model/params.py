@@ -95,7 +95,7 @@ def _p(default, label, description, *, unit="", range=(-math.inf, math.inf), sof
 THICKNESS_MODES = ("noise", "height")
 NORMAL_MODES = ("parallel", "tilted", "correlated")
 LOBES = ("beckmann", "phong")
-BASE_LAYERS = ("none", "transparent")
+BASE_LAYERS = ("none", "transparent", "metal")
 ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
 
 # What an artist reads for each option of the enum parameters (menus, CLI help).
@@ -104,6 +104,7 @@ OPTION_LABELS = {
     "parallel": "Parallel", "tilted": "Tilted", "correlated": "Follows thickness",
     "beckmann": "Beckmann", "phong": "Phong (OSL only)",
     "none": "None (your Base Shader)", "transparent": "Transparent (soap film)",
+    "metal": "Metal (base colour)",
     "rgb": "RGB (the paper's 3 wavelengths)", "analytic": "Analytic spectral",
     "spectral4": "Spectral, 4 wavelengths", "spectral8": "Spectral, 8 wavelengths",
     "spectral16": "Spectral, 16 wavelengths", "spectral32": "Spectral, 32 wavelengths",
@@ -173,7 +174,8 @@ class LayeredParams:
     base_b: float = _p(0.8, "Base B", "Diffuse base colour, blue", range=(0.0, 1.0), group="Diffuse")
     base_layer: str = _p("none", "Base shader",
                          "What lies under the layer besides the diffuse part: 'none' (leave the Base Shader "
-                         "input to the artist) or 'transparent' (a soap film)", options=BASE_LAYERS, group="Diffuse")
+                         "input to the artist), 'transparent' (a soap film) or 'metal' (a metal of the base "
+                         "colour, as rough as the upper boundary)", options=BASE_LAYERS, group="Diffuse")
     accuracy: str = _p("analytic", "Accuracy",
                        "Colour model: 'rgb' (the paper's three wavelengths), 'analytic' (three channels, each "
                        "with the interference integrated over its band in closed form: thick layers fade to their "

@@ -32,20 +32,32 @@ PAPER_PRESETS: dict[str, dict] = {
 }
 
 ARTIST_PRESETS: dict[str, dict] = {
+    # Tuned under Blender's bundled forest HDRI with a key sun, seen through AgX (docs/looks.md).
+    # A clear film: the transparent base shows what lies behind it.
     "soap_bubble": dict(r1_r=1.33, r1_g=1.33, r1_b=1.33, d_min=150.0, d_max=900.0, thickness_mode="height",
                         e0=800.0, e1=800.0, ks=1.0, kd=0.0, base_r=0.0, base_g=0.0, base_b=0.0,
                         base_layer="transparent"),
-    "oil_slick": dict(r1_r=1.45, r1_g=1.47, r1_b=1.5, d_min=150.0, d_max=600.0, noise_scale=2.5,
-                      noise_detail=4.0, e0=400.0, e1=400.0, ks=1.0, kd=0.6,
-                      base_r=0.02, base_g=0.02, base_b=0.025),
-    "beetle_shell": dict(r1_r=1.56, r1_g=1.6, r1_b=1.7, d_min=220.0, d_max=260.0, normal_mode="tilted",
-                         tilt=8.0, e0=300.0, e1=300.0, ks=1.0, kd=0.4, base_r=0.02, base_g=0.08, base_b=0.03),
-    "anodised_titanium": dict(r1_r=2.2, r1_g=2.3, r1_b=2.45, d_min=40.0, d_max=60.0, noise_scale=1.5,
-                              e0=250.0, e1=300.0, ks=1.0, kd=0.6, base_r=0.45, base_g=0.43, base_b=0.4),
-    "old_metal": dict(r1_r=1.5, r1_g=1.5, r1_b=1.5, d_min=1.0, d_max=30.0, noise_scale=8.0, e0=60.0,
-                      e1=60.0, ks=0.5, kd=1.0, base_r=0.55, base_g=0.5, base_b=0.45),
-    "glazed_clay": dict(r1_r=1.4, r1_g=1.4, r1_b=1.4, d_min=67.0, d_max=73.0, e0=120.0, e1=120.0, ks=0.6,
-                        kd=1.0, base_r=0.75, base_g=0.42, base_b=0.28),
+    # Rainbow bands on a dark wet base: a wide range of thickness in large, soft swirls, and a
+    # dimmer sharp reflection (wet asphalt reflects little) that keeps the bands saturated.
+    "oil_slick": dict(r1_r=1.45, r1_g=1.47, r1_b=1.5, d_min=100.0, d_max=1000.0, noise_scale=1.2,
+                      noise_detail=3.0, e0=1000.0, e1=1000.0, ks=0.6, kd=1.0,
+                      base_r=0.015, base_g=0.015, base_b=0.018),
+    # A jewel beetle: a high-index chitin layer thick enough for second-order green, which
+    # turns blue and violet towards grazing angles, over a dark base.
+    "beetle_shell": dict(r1_r=1.7, r1_g=1.75, r1_b=1.85, d_min=280.0, d_max=320.0, e0=500.0, e1=500.0,
+                         ks=1.0, kd=0.1, base_r=0.01, base_g=0.03, base_b=0.015),
+    # Titanium dioxide (index 2.2-2.45) on titanium: deep blue, purple where thinner, gold in the
+    # thinnest patches, over a dark grey metal.
+    "anodised_titanium": dict(r1_r=2.2, r1_g=2.3, r1_b=2.45, d_min=30.0, d_max=110.0, noise_scale=1.2,
+                              e0=800.0, e1=800.0, ks=1.0, kd=0.0, base_layer="metal",
+                              base_r=0.22, base_g=0.21, base_b=0.2),
+    # Bronze with patchy oxide films (high index, 0-120 nm): rough, tarnished, red-gold to blue patches.
+    "old_metal": dict(r1_r=2.4, r1_g=2.5, r1_b=2.7, d_min=0.0, d_max=120.0, noise_scale=3.0, noise_detail=6.0,
+                      noise_roughness=0.6, e0=120.0, e1=120.0, ks=0.6, kd=0.0, base_layer="metal",
+                      base_r=0.55, base_g=0.38, base_b=0.2),
+    # Terracotta under a glossy glaze thick enough for a soft pink-blue sheen on the reflections.
+    "glazed_clay": dict(r1_r=1.4, r1_g=1.4, r1_b=1.4, d_min=220.0, d_max=380.0, noise_scale=2.0, e0=1500.0,
+                        e1=1500.0, ks=0.6, kd=0.8, base_r=0.5, base_g=0.2, base_b=0.1),
 }
 
 # The paper's figures keep the paper's colour model (three wavelengths as R, G, B); new
