@@ -18,11 +18,13 @@ from layered_brdf_addon.cli.codecs import read_exr_layers, srgb_encode, to_srgb8
 from layered_brdf_addon.cli.commands import format_table
 from layered_brdf_addon.cli.gallery import label_lines, layout_for
 from layered_brdf_addon.cli.job_files import load_job_file
+from layered_brdf_addon.cli.lookdev import DEFAULT_PRESETS, settings_from_options as lookdev_settings
+from layered_brdf_addon.cli.render_job import PNG_ENCODING
 from layered_brdf_addon.cli.requests import request_from_options
 from layered_brdf_addon.cli.sidecar import read_sidecar
 from layered_brdf_addon.cli.staging import OutputPaths, StagedOutputs, stale_temps, temp_path
 from layered_brdf_addon.model.params import PARAM_SPECS, LayeredParams, ParameterError
-from layered_brdf_addon.model.presets import PAPER_PRESETS, preset
+from layered_brdf_addon.model.presets import PAPER_PRESETS, PRESETS, preset
 
 from constants import MAX_FAILING, REL_TOL
 from process_helpers import interrupt_once_started, start_cli, stop
@@ -65,10 +67,11 @@ def test_every_parameter_has_an_option_with_unit_range_and_choices():
     assert (ns.d_min, ns.normal_mode, ns.tilt) == (80.0, "tilted", 12.0)
 
 
-def test_no_command_means_gallery():
-    assert cli.normalise_argv([]) == ["gallery"]
-    assert cli.normalise_argv(["--samples", "4"]) == ["gallery", "--samples", "4"]
+def test_no_command_means_lookdev():
+    assert cli.normalise_argv([]) == ["lookdev"]
+    assert cli.normalise_argv(["--samples", "4"]) == ["lookdev", "--samples", "4"]
     assert cli.normalise_argv(["render", "--preset", "fig4_tilted"])[0] == "render"
+    assert cli.normalise_argv(["gallery"]) == ["gallery"]
 
 
 def test_request_validation_names_the_parameter(tmp_path):
@@ -168,10 +171,11 @@ def test_gallery_layout_fits_all_paper_presets():
 # invalid input through the command line: exit 2, a message, nothing written
 @pytest.fixture(scope="module")
 def blend_file(tmp_path_factory) -> Path:
-    """A small .blend: factory cube, camera and light, 48x36 px."""
+    """A small .blend: factory cube, camera and light, 48x36 px, AgX view transform with +0.5 exposure."""
     path = tmp_path_factory.mktemp("blend") / "scene.blend"
     code = ("import bpy\nbpy.ops.wm.read_factory_settings(use_empty=False)\n"
             "r = bpy.context.scene.render\nr.resolution_x, r.resolution_y = 48, 36\n"
+            "v = bpy.context.scene.view_settings\nv.view_transform, v.look, v.exposure = 'AgX', 'None', 0.5\n"
             f"bpy.ops.wm.save_as_mainfile(filepath={str(path)!r})\n")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=TIMEOUT)
     return path
@@ -245,12 +249,14 @@ def test_render_writes_png_exr_sidecar_that_predict_the_pixels(tmp_path):
     ag = agreement(passes.beauty, expected, mask, rel_tol=REL_TOL)
     assert ag.failing_fraction <= MAX_FAILING, str(ag)
     png = np.asarray(Image.open(out / "sphere.png"))
-    assert png.shape == (64, 64, 3)
+    assert png.shape == (64, 64, 3) and side["png_encoding"] == PNG_ENCODING
     assert np.abs(png.astype(int) - to_srgb8(passes.beauty).astype(int)).max() <= 1
 
 
 @pytest.mark.slow
 def test_render_on_an_object_of_a_blend(tmp_path, blend_file):
+    from PIL import Image
+
     res = run_cli("render", "--blend", blend_file, "--object", "Cube", "--preset", "oil_slick", "--samples", 1,
                   "--output", tmp_path / "cube", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
@@ -259,6 +265,36 @@ def test_render_on_an_object_of_a_blend(tmp_path, blend_file):
     assert (side["camera"]["width"], side["camera"]["height"]) == (48, 36)
     assert beauty(tmp_path / "cube.exr").shape == (36, 48, 3)
     assert beauty(tmp_path / "cube.exr").max() > 0
+    # The PNG keeps the .blend's colour management (AgX, exposure +0.5), not the Standard curve.
+    assert side["png_view"] == {"view_transform": "AgX", "look": "None", "exposure": 0.5, "gamma": 1.0,
+                                "display_device": "sRGB"}
+    assert "view transform AgX" in side["png_encoding"] and "exposure 0.5" in side["png_encoding"]
+    png = np.asarray(Image.open(tmp_path / "cube.png").convert("RGB")).astype(int)
+    standard = to_srgb8(beauty(tmp_path / "cube.exr")).astype(int)
+    assert np.abs(png - standard).mean() > 5.0
+    own = blender_encoding(tmp_path / "cube.exr", side["png_view"], tmp_path / "own.png").astype(int)
+    assert np.abs(png - own).max() <= 1
+
+
+def blender_encoding(exr: Path, view: dict, png: Path) -> np.ndarray:
+    """Blender's own 8-bit encoding of the EXR's beauty with the view settings ``view``: the
+    file loaded as an image and saved as a render PNG from a scene with those settings."""
+    import bpy
+    from PIL import Image
+
+    scene = bpy.data.scenes.new("encode")
+    img = bpy.data.images.load(str(exr), check_existing=False)
+    try:
+        scene.display_settings.display_device = view["display_device"]
+        for key in ("view_transform", "look", "exposure", "gamma"):
+            setattr(scene.view_settings, key, view[key])
+        s = scene.render.image_settings
+        s.media_type, s.file_format, s.color_mode, s.color_depth = "IMAGE", "PNG", "RGB", "8"
+        img.save_render(filepath=str(png), scene=scene)
+    finally:
+        bpy.data.images.remove(img)
+        bpy.data.scenes.remove(scene)
+    return np.asarray(Image.open(png).convert("RGB"))
 
 
 @pytest.mark.slow
@@ -381,3 +417,92 @@ def test_gallery_contact_sheet_has_one_labelled_tile_per_configuration(tmp_path)
     assert "one render of 9 spheres" in res.stdout
     params = LayeredParams.from_dict(meta["tiles"][0]["params"])
     assert params == preset(names[0])
+
+
+# ---------------------------------------------------------------------------
+# lookdev: every preset on the shader ball, one labelled sheet
+def test_lookdev_options_are_validated_without_blender(tmp_path):
+    s = lookdev_settings({"output": tmp_path / "sheet", "size": 24, "samples": 2, "presets": ["oil_slick"]})
+    assert s.output == tmp_path / "sheet.png" and s.sidecar == tmp_path / "sheet.json"
+    assert (s.size, s.samples, s.presets, s.hdri) == (24, 2, ("oil_slick",), None)
+    default = lookdev_settings({"output": tmp_path / "d.png"})
+    assert set(default.presets) == set(PRESETS) == set(DEFAULT_PRESETS)
+    cases = [({"size": 8}, "size", "[16, 2048]"), ({"size": "big"}, "size", "[16, 2048]"),
+             ({"samples": 0}, "samples", "[1, 4096]"), ({"presets": ["oil_slick", "nope"]}, "presets", "oil_slick"),
+             ({"presets": ["oil_slick", "oil_slick"]}, "presets", "distinct"), ({"columns": 0}, "columns", "[1, 64]"),
+             ({"output": tmp_path}, "output", "folder"), ({"hdri": "../x"}, "hdri", "bundled HDRIs")]
+    for options, name, allowed in cases:
+        with pytest.raises(ParameterError) as e:
+            lookdev_settings({"output": tmp_path / "x.png", **options})
+        assert e.value.name == name and allowed in str(e.value), options
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args, names", [
+    (["--size", "4"], ["'size'", "[16, 2048]", "--size"]),
+    (["--samples", "-3"], ["'samples'", "[1, 4096]"]),
+    (["--presets", "oil_slick", "fig9"], ["'presets'", "'fig9'", "soap_bubble"]),
+    (["--hdri", "mars"], ["'hdri'", "'mars'", "forest", "courtyard", "studio"]),
+])
+def test_invalid_lookdev_exits_2_and_writes_nothing(tmp_path, args, names):
+    res = run_cli("lookdev", *args, "--output", tmp_path / "out" / "sheet.png", cwd=tmp_path, timeout=60)
+    assert res.returncode == 2, res.stderr
+    for n in names:
+        assert n in res.stderr
+    assert files_under(tmp_path) == []
+
+
+@pytest.mark.slow
+def test_lookdev_sheet_has_a_labelled_tile_per_preset(tmp_path):
+    from PIL import Image
+
+    (tmp_path / "out").mkdir()
+    old = tmp_path / "out" / "sheet.png"
+    old.write_bytes(b"an earlier sheet")
+    res = run_cli("lookdev", "--presets", "oil_slick", "fig4_tilted", "--size", 24, "--samples", 2,
+                  "--output", old, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert files_under(tmp_path / "out") == ["sheet.json", "sheet.png"]
+    assert "look-dev" in res.stderr and "2/2" in res.stderr  # the progress bar
+    meta = read_sidecar(tmp_path / "out" / "sheet.json")
+    assert [t["name"] for t in meta["tiles"]] == ["oil_slick", "fig4_tilted"]
+    assert meta["view"]["view_transform"] == "AgX" and meta["hdri"] == "forest.exr" and meta["samples"] == 2
+    img = np.asarray(Image.open(old).convert("RGB"))
+    assert (img.shape[1], img.shape[0]) == tuple(meta["layout"]["sheet_size"])
+    for t in meta["tiles"]:
+        assert t["label"][0] == {"oil_slick": "Oil slick", "fig4_tilted": "Fig. 4 tilted boundary"}[t["name"]]
+        assert t["params"] == preset(t["name"]).to_dict()
+        x0, y0, x1, y1 = t["box"]
+        assert (x1 - x0, y1 - y0) == (24, 24) and img[y0:y1, x0:x1].std() > 5  # ball on a background
+        assert img[y1:y1 + meta["layout"]["label_height"], x0:x1].max() > 150  # its caption
+    a, b = (img[t["box"][1]:t["box"][3], t["box"][0]:t["box"][2]].astype(int) for t in meta["tiles"])
+    assert np.abs(a - b).mean() > 2  # two materials, two looks
+
+
+@pytest.mark.slow
+def test_interrupted_lookdev_keeps_the_earlier_sheet(tmp_path):
+    """Ctrl-C after the first tile: exit 130, the earlier sheet untouched, nothing else left."""
+    import threading
+    import time
+
+    (tmp_path / "out").mkdir()
+    old = tmp_path / "out" / "lookdev.png"
+    old.write_bytes(b"an earlier sheet")
+    proc = start_cli("lookdev", "--presets", "glazed_clay", "fig3_clay", "fig6_thin", "--size", 48, "--samples", 64,
+                     "--output", old, cwd=tmp_path)
+    err: list[str] = []
+    reader = threading.Thread(target=lambda: err.extend(iter(lambda: proc.stderr.read(1), "")), daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + 120
+        while "1/3" not in "".join(err) and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert proc.poll() is None, "".join(err)
+        proc.send_signal(__import__("signal").SIGINT)
+        proc.wait(timeout=60)
+        reader.join(timeout=10)
+    finally:
+        stop(proc)
+    assert proc.returncode == 130, "".join(err)
+    assert "no partial output" in "".join(err)
+    assert files_under(tmp_path / "out") == ["lookdev.png"] and old.read_bytes() == b"an earlier sheet"

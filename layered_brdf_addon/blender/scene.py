@@ -273,6 +273,52 @@ def render_to_exr(path, scene=None, guard=None) -> float:
     return render_to_file(path, scene, guard)
 
 
+def view_settings_record(scene=None) -> dict:
+    """The scene's colour management as plain data: view transform, look, exposure, gamma, display."""
+    scene = scene or bpy.context.scene
+    v = scene.view_settings
+    return {"view_transform": v.view_transform, "look": v.look, "exposure": v.exposure, "gamma": v.gamma,
+            "display_device": scene.display_settings.display_device}
+
+
+def encode_view(rgb, scene=None, alpha=None) -> np.ndarray:
+    """8-bit display pixels of linear (scene-referred) ``rgb`` (H, W, 3), rows top to bottom,
+    encoded by Blender's own colour management with the scene's view transform, look,
+    exposure, gamma, display and dither: what Blender writes when it saves a render of
+    these pixels as an 8-bit PNG.  With ``alpha`` (premultiplied input) the result is
+    straight RGBA (H, W, 4), else RGB."""
+    from PIL import Image
+
+    scene = scene or bpy.context.scene
+    rgb = np.asarray(rgb, dtype=np.float32)[..., :3]
+    h, w = rgb.shape[:2]
+    a = np.ones((h, w, 1), np.float32) if alpha is None else np.asarray(alpha, np.float32).reshape(h, w, 1)
+    img = bpy.data.images.new(".layered_brdf_encode", w, h, alpha=True, float_buffer=True)
+    s = scene.render.image_settings
+    saved = {k: getattr(s, k) for k in ("media_type", "file_format", "color_mode", "color_depth",
+                                        "color_management")}
+    try:
+        img.pixels.foreach_set(np.ascontiguousarray(np.concatenate([rgb, a], axis=-1)[::-1]).ravel())
+        s.media_type = "IMAGE"
+        s.file_format = "PNG"
+        s.color_mode = "RGB" if alpha is None else "RGBA"
+        s.color_depth = "8"
+        s.color_management = "FOLLOW_SCENE"
+        with tempfile.TemporaryDirectory(prefix="layered_brdf_png_") as tmp:
+            path = Path(tmp) / "encoded.png"
+            img.save_render(filepath=str(path), scene=scene)
+            with Image.open(path) as im:
+                out = np.array(im.convert("RGB" if alpha is None else "RGBA"))
+    finally:
+        bpy.data.images.remove(img)
+        for k in ("media_type", "file_format", "color_mode", "color_depth", "color_management"):
+            try:
+                setattr(s, k, saved[k])
+            except (TypeError, ValueError):  # a value only valid for the format it belonged to
+                pass
+    return out
+
+
 def render_passes(scene=None, keep: str | os.PathLike | None = None) -> Passes:
     """Render and return the passes (EXR in a temporary folder unless ``keep`` names a path)."""
     if keep is not None:

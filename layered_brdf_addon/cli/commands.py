@@ -1,6 +1,8 @@
-"""The command line: ``python -m layered_brdf_addon [gallery|render|batch] ...``.
+"""The command line: ``python -m layered_brdf_addon [lookdev|gallery|render|batch] ...``.
 
-``gallery`` (the default) renders the paper's Figs. 3-6 as one contact sheet;
+``lookdev`` (the default) renders every preset on a shader ball under a bundled HDRI,
+one labelled look-development sheet; ``gallery`` renders the paper's Figs. 3-6 as one
+contact sheet;
 ``render`` renders one material on the reference sphere or on an object of a .blend;
 ``batch`` renders the jobs of a TOML/JSON file, serially or on Dask.  The options of
 the material's parameters are derived from
@@ -24,7 +26,7 @@ from ..model.params import PARAM_SPECS, ParameterError, ParamSpec
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 
 PROG = "layered-brdf"
-COMMANDS = ("gallery", "render", "batch")
+COMMANDS = ("lookdev", "gallery", "render", "batch")
 EXIT_OK, EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
@@ -112,12 +114,35 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of all sub-commands."""
     parser = ArgumentParser(
         prog=PROG, description="Render iridescent layered materials (Granier & Heidrich 2003) with Blender. "
-        "Without a command, renders the gallery.",
+        "Without a command, renders the look-dev sheet.",
         epilog="exit codes: 0 ok, 1 a render or job failed, 2 invalid input (nothing written), 130 interrupted")
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{gallery,render,batch}")
+    sub = parser.add_subparsers(dest="command", metavar="{lookdev,gallery,render,batch}")
 
-    g = sub.add_parser("gallery", help="the paper's Figs. 3-6 in one labelled contact sheet (default)",
+    from .lookdev import DEFAULT_OUTPUT, DEFAULT_SAMPLES, DEFAULT_SIZE, SAMPLES_RANGE, SIZE_RANGE
+
+    ld = sub.add_parser("lookdev", help="every preset on a shader ball under an HDRI, one labelled sheet (default)",
+                        description="Render every preset (or --presets) on the look-dev shader ball under one of "
+                        "Blender's bundled HDRIs and a soft sun, one Cycles render per preset, and compose a "
+                        "labelled sheet encoded with the scene's AgX view transform: STEM.png and the sidecar "
+                        "STEM.json, written together or not at all.")
+    ld.add_argument("--output", default=None, metavar="PATH", help=f"the sheet (default {DEFAULT_OUTPUT})")
+    ld.add_argument("--size", default=None, metavar="PX",
+                    help=f"pixels per tile, an integer in [{SIZE_RANGE[0]}, {SIZE_RANGE[1]}] (default {DEFAULT_SIZE})")
+    ld.add_argument("--samples", default=None, metavar="N",
+                    help=f"samples per pixel, an integer in [{SAMPLES_RANGE[0]}, {SAMPLES_RANGE[1]}] "
+                    f"(default {DEFAULT_SAMPLES})")
+    ld.add_argument("--presets", nargs="+", default=None, metavar="NAME",
+                    help="the presets to show (default: every artist preset, then the paper's figures): "
+                    + ", ".join(list(ARTIST_PRESETS) + list(PAPER_PRESETS)))
+    ld.add_argument("--hdri", default=None, metavar="NAME",
+                    help="one of Blender's bundled HDRIs: forest (default), courtyard, studio, city, interior, "
+                    "night, sunrise, sunset")
+    ld.add_argument("--columns", default=None, metavar="N", help="tiles per row (default: a square grid)")
+    ld.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    ld.add_argument("--verbose", action="store_true", help="show Blender's own log")
+
+    g = sub.add_parser("gallery", help="the paper's Figs. 3-6 in one labelled contact sheet",
                        description="Render every configuration of the paper's Figs. 3-6 (presets "
                        + ", ".join(PAPER_PRESETS) + ") as spheres in one scene, one render, and compose "
                        "a labelled contact sheet STEM.png, with STEM.exr and the sidecar STEM.json.")
@@ -130,7 +155,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scene_options(g, "samples per pixel (default 16; one is exact under the sun, more anti-alias)")
 
     r = sub.add_parser("render", help="one material on the reference sphere or on an object of a .blend",
-                       description="Render one material; write STEM.png (sRGB, Standard view transform), "
+                       description="Render one material; write STEM.png (8-bit sRGB: the reference sphere with the "
+                       "Standard view transform, a --blend with its scene's view transform, look and exposure), "
                        "STEM.exr (float: beauty, normal, thickness, lower and upper normal) and STEM.json "
                        "(every parameter, camera, sun, timing: enough to predict the pixels).")
     src = r.add_argument_group("material")
@@ -261,6 +287,22 @@ def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     return EXIT_OK
 
 
+def cmd_lookdev(ns: argparse.Namespace, argv: Sequence[str]) -> int:
+    """``lookdev``: every preset on the shader ball, one labelled sheet."""
+    from .lookdev import render_lookdev, settings_from_options
+
+    s = settings_from_options(_options(ns, ("output", "size", "samples", "presets", "hdri", "columns")))
+    with blender_output(ns.verbose):
+        res = render_lookdev(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv], progress=ns.progress)
+    rows = [[t["name"], t["label"][0], f"{t['render_seconds']:.1f}"] for t in res.tiles]
+    print(format_table(["preset", "label", "render s"], rows))
+    w, h = res.layout.sheet_size
+    print(f"\n{len(res.tiles)} tiles ({s.size} px, {s.samples} spp, {res.metadata['hdri']}, "
+          f"{res.metadata['view']['view_transform']}): render {res.render_seconds:.1f} s; total {res.total_seconds:.1f} s")
+    print(f"wrote {res.png} ({w}x{h}), {res.sidecar}")
+    return EXIT_OK
+
+
 def cmd_batch(ns: argparse.Namespace) -> int:
     """``batch``: run the jobs of a job file and print a summary table."""
     from .job_files import load_job_file
@@ -296,16 +338,17 @@ def cmd_batch(ns: argparse.Namespace) -> int:
 
 
 def _hint(e: ParameterError) -> str:
-    if any(s.name == e.name for s in PARAM_SPECS) or e.name in ("sun_strength", "output", "resolution"):
+    if any(s.name == e.name for s in PARAM_SPECS) or e.name in ("sun_strength", "output", "resolution", "size",
+                                                                  "samples", "presets", "hdri", "columns"):
         return f" (option --{e.name.replace('_', '-')})"
     return ""
 
 
 def normalise_argv(argv: Sequence[str]) -> list[str]:
-    """``gallery`` is the command when none is given (options alone go to the gallery)."""
+    """``lookdev`` is the command when none is given (options alone go to the look-dev sheet)."""
     argv = list(argv)
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
-        argv = ["gallery", *argv]
+        argv = ["lookdev", *argv]
     return argv
 
 
@@ -319,7 +362,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_render(ns, argv)
         if ns.command == "batch":
             return cmd_batch(ns)
-        return cmd_gallery(ns, argv)
+        if ns.command == "gallery":
+            return cmd_gallery(ns, argv)
+        return cmd_lookdev(ns, argv)
     except ParameterError as e:
         print(f"{PROG}: error: {e}{_hint(e)}", file=sys.stderr)
         return EXIT_INVALID

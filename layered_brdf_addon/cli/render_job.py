@@ -25,6 +25,13 @@ from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dic
 from .staging import InterruptGuard, OutputPaths, StagedOutputs
 
 PNG_ENCODING = "8-bit sRGB, Blender's Standard view transform (clipped to [0, 1])"
+
+
+def view_png_encoding(view: Mapping[str, Any]) -> str:
+    """The sidecar's ``png_encoding`` of a PNG encoded by Blender with a scene's view settings."""
+    return (f"8-bit, Blender's colour management of the scene: view transform {view['view_transform']}, "
+            f"look {view['look']}, exposure {view['exposure']:g}, gamma {view['gamma']:g}, "
+            f"display {view['display_device']}")
 EXR_PASSES = ["Combined", "Normal", "layer_thickness", "lower_normal", "upper_normal"]
 
 
@@ -131,10 +138,10 @@ def _osl_aov_layers(scene, guard) -> dict[str, dict[str, Any]]:
 
 def sidecar(kind: str, scene, paths: OutputPaths, *, backend: str, camera: Mapping[str, Any],
             sun: Mapping[str, Any] | None, centers, render_seconds: float, t_start: float,
-            command: Sequence[str] | None, **fields: Any) -> dict[str, Any]:
+            command: Sequence[str] | None, png_encoding: str = PNG_ENCODING, **fields: Any) -> dict[str, Any]:
     """The sidecar of a render: what ``kind`` of scene (reference, blend, gallery), its
     ``fields`` (material, layout, ...), then what every render records: backend, sampling,
-    camera, sun, sphere centres, outputs, timing and versions."""
+    camera, sun, sphere centres, outputs, how the PNG was encoded, timing and versions."""
     import bpy
 
     return {
@@ -144,7 +151,7 @@ def sidecar(kind: str, scene, paths: OutputPaths, *, backend: str, camera: Mappi
         "threads": scene.render.threads, "filter_width": scene.cycles.filter_width,
         "camera": camera, "sun": sun, "centers": centers, "radius": 1.0 if centers else None,
         "outputs": {"png": paths.png, "exr": paths.exr, "json": paths.json},
-        "png_encoding": PNG_ENCODING,
+        "png_encoding": png_encoding,
         "render_seconds": render_seconds, "total_seconds": time.perf_counter() - t_start,
         "bpy_version": bpy.app.version_string, "layered_brdf_version": __version__,
         "host": socket.gethostname(), "python": platform.python_version(),
@@ -233,11 +240,15 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
                 name=req.name, preset=req.preset, params_file=req.params_file, overrides=dict(req.overrides),
                 params=req.params.to_dict(), plan={**plan.to_dict(), "key": plan.key, "describe": plan.describe()},
                 blend=req.blend, object=req.object, lights=_blend_lights(scene) if req.blend else None,
-                exr_passes=EXR_PASSES)
+                exr_passes=EXR_PASSES, png_view=S.view_settings_record(scene) if req.blend else None,
+                png_encoding=view_png_encoding(S.view_settings_record(scene)) if req.blend else PNG_ENCODING)
 
         transparent = scene.render.film_transparent
-        data = render_outputs(scene, paths, guard, png=lambda rgb, a: to_srgb8(rgb, a if transparent else None),
-                              describe=describe, osl_aovs=req.backend == "osl")
+        if req.blend:  # the PNG the .blend's own colour management gives (its view transform, look, exposure)
+            png = lambda rgb, a: S.encode_view(rgb, scene, a if transparent else None)  # noqa: E731
+        else:  # the reference sphere: Standard, clipped
+            png = lambda rgb, a: to_srgb8(rgb, a if transparent else None)  # noqa: E731
+        data = render_outputs(scene, paths, guard, png=png, describe=describe, osl_aovs=req.backend == "osl")
     if log:
         log(f"wrote {paths.png}, {paths.exr}, {paths.json} (render {data['render_seconds']:.2f} s)")
     return data

@@ -1,0 +1,204 @@
+"""The look-development sheet: every preset on the shader ball under a bundled HDRI.
+
+One look-dev scene (:mod:`layered_brdf_addon.blender.lookdev`) is rendered once per
+preset with the preset's material on the ball: every tile is the same shot.  (One
+render of all balls in a grid measured 2.5x faster, but the balls reflect and shadow
+each other and each sees the HDRI from elsewhere; docs/looks.md has the numbers.)  The
+linear tiles are put in a grid,
+encoded by Blender's own colour management with the scene's view transform (AgX by
+default), and labelled with each preset's name for people.  The sheet ``STEM.png`` and
+its sidecar ``STEM.json`` appear together or not at all.
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from ..model.params import ParameterError
+from ..model.policy import plan_effects
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset, preset_label
+from .gallery import GalleryLayout, compose_sheet, layout_for
+from .requests import int_option
+from .staging import StagedOutputs, TargetError, check_targets, output_stem
+
+DEFAULT_OUTPUT = Path("out") / "lookdev.png"
+DEFAULT_PRESETS = tuple(ARTIST_PRESETS) + tuple(PAPER_PRESETS)
+# Sized for about a minute on two cores (measured: docs/looks.md).
+DEFAULT_SIZE = 160
+DEFAULT_SAMPLES = 24
+SIZE_RANGE = (16, 2048)
+SAMPLES_RANGE = (1, 4096)
+BACKEND = "nodes"
+
+
+@dataclass
+class LookdevSettings:
+    """Validated options of ``lookdev``."""
+
+    output: Path = DEFAULT_OUTPUT  # the sheet (.png); the sidecar is the same stem .json
+    size: int = DEFAULT_SIZE
+    samples: int = DEFAULT_SAMPLES
+    presets: tuple[str, ...] = DEFAULT_PRESETS
+    hdri: str | None = None
+    columns: int | None = None
+
+    @property
+    def sidecar(self) -> Path:
+        return self.output.with_suffix(".json")
+
+
+def check_sheet_output(value: Any) -> Path:
+    """The sheet's path (``.png`` added to a stem), checked writable before anything renders,
+    with its sidecar ``.json``; :class:`ParameterError` naming ``output`` otherwise."""
+    allowed = "a file path (.png, or a stem) in a writable folder"
+    if not isinstance(value, (str, Path)) or not str(value).strip() or "\x00" in str(value):
+        raise ParameterError("output", value, allowed)
+    if isinstance(value, str) and value.endswith(("/", "\\")):
+        raise ParameterError("output", value, allowed + "; it names a folder")
+    stem = output_stem(Path(value).expanduser())
+    if stem.name.startswith("."):
+        raise ParameterError("output", str(value), allowed + "; a name not starting with '.'")
+    png = stem.with_name(stem.name + ".png")
+    if png.is_dir() or stem.is_dir():
+        raise ParameterError("output", str(value), allowed + "; it names a folder")
+    try:
+        check_targets([png, png.with_suffix(".json")])
+    except TargetError as e:
+        raise ParameterError("output", str(value), f"{allowed}; {e}") from None
+    return png.absolute()
+
+
+def settings_from_options(options: dict[str, Any]) -> LookdevSettings:
+    """Validate ``lookdev`` options without Blender (the HDRI's name is checked when Blender
+    is loaded, before anything is written)."""
+    o = {k: v for k, v in options.items() if v is not None}
+    size = int_option("size", o.get("size", DEFAULT_SIZE), *SIZE_RANGE)
+    samples = int_option("samples", o.get("samples", DEFAULT_SAMPLES), *SAMPLES_RANGE)
+    names = tuple(o.get("presets") or DEFAULT_PRESETS)
+    if len(set(names)) != len(names):
+        raise ParameterError("presets", list(names), "distinct preset names")
+    for name in names:
+        if name not in PRESETS:
+            raise ParameterError("presets", name, "preset names among " + ", ".join(PRESETS))
+    hdri = o.get("hdri")
+    if hdri is not None and (not isinstance(hdri, str) or not hdri.strip() or "/" in hdri):
+        raise ParameterError("hdri", hdri, "the name of one of Blender's bundled HDRIs (forest, courtyard, ...)")
+    columns = int_option("columns", o["columns"], 1, 64) if "columns" in o else None
+    output = check_sheet_output(o.get("output", DEFAULT_OUTPUT))
+    return LookdevSettings(output=output, size=size, samples=samples, presets=names, hdri=hdri, columns=columns)
+
+
+def tile_label(name: str) -> list[str]:
+    """A tile's caption: the preset's name for people, then its thickness range and indices."""
+    p = preset(name)
+    d = f"{p.d_min:g}\u2013{p.d_max:g} nm" if p.d_min != p.d_max else f"{p.d_min:g} nm"
+    return [preset_label(name), f"{d} \u00b7 n {p.r1_g:g}"]
+
+
+@dataclass
+class LookdevResult:
+    png: Path
+    sidecar: Path
+    layout: GalleryLayout
+    tiles: list[dict[str, Any]]
+    render_seconds: float
+    total_seconds: float
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+
+def _progress(total: int, enabled: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc="look-dev", unit="tile", file=sys.stderr, disable=not enabled,
+                dynamic_ncols=True)
+
+
+def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, progress: bool = True,
+                   log: Callable[[str], None] | None = None) -> LookdevResult:
+    """Render every preset of ``s`` on the shader ball; write the labelled sheet and its sidecar."""
+    from ..blender import tempdirs
+    from .staging import InterruptGuard
+
+    t_start = time.perf_counter()
+    tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
+    with InterruptGuard() as guard:
+        guard.add_cleanup(tempdirs.remove_process_tempdir)
+        import bpy
+
+        from ..blender import lookdev as L
+        from ..blender import scene as S
+        from ..blender.material import apply_layered_material
+        from .. import __version__
+        from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, write_json
+
+        hdri = L.hdri_path(s.hdri)  # a bad name: ParameterError before anything is made
+        labels = [tile_label(n) for n in s.presets]
+        title = f"layered-brdf look-dev \u00b7 {hdri.stem} HDRI + sun \u00b7 Cycles {s.samples} spp \u00b7 AgX"
+        layout = layout_for(labels, s.size, s.columns, title)
+        S.reset_blender()
+        guard.arm()
+        scene, ball = L.build_lookdev_scene(size=s.size, samples=s.samples, hdri=hdri.name)
+        sheet = np.zeros((layout.rows * s.size, layout.columns * s.size, 3), np.float32)
+        tiles: list[dict[str, Any]] = []
+        render_seconds = 0.0
+        bar = _progress(len(s.presets), progress)
+        try:
+            # the tiles' EXRs: in the process's own temp folder, which an interrupt removes
+            with tempfile.TemporaryDirectory(prefix="lookdev_") as tmp_name:
+                tmp = Path(tmp_name)
+                for k, name in enumerate(s.presets):
+                    bar.set_postfix_str(name)
+                    guard.check()
+                    ball.material_slots[0].material = None  # a material of its own per preset
+                    params = preset(name)
+                    apply_layered_material(ball, params, BACKEND, name=name)
+                    exr = tmp / f"{k}.exr"
+                    seconds = S.render_to_exr(exr, scene, guard)
+                    render_seconds += seconds
+                    beauty = S.passes_from_exr(exr).beauty
+                    x0, y0, x1, y1 = layout.render_box(k)
+                    sheet[y0:y1, x0:x1] = beauty
+                    tiles.append({"name": name, "label": labels[k], "box": layout.tile_box(k),
+                                  "render_box": layout.render_box(k), "render_seconds": seconds,
+                                  "params": params.to_dict(), "plan": plan_effects(params).key})
+                    bar.update(1)
+        finally:
+            bar.close()
+        guard.check()
+        view = S.view_settings_record(scene)
+        pixels = np.asarray(compose_sheet(S.encode_view(sheet, scene), layout, labels, title))
+        from .codecs import save_png
+
+        data = {
+            "format": SIDECAR_FORMAT, "version": SIDECAR_VERSION, "scene": "lookdev", "title": title,
+            "hdri": hdri.name, "engine": scene.render.engine, "backend": BACKEND, "size": s.size,
+            "samples": s.samples, "seed": scene.cycles.seed, "threads": scene.render.threads,
+            "png_encoding": "8-bit, Blender's colour management of the look-dev scene: view transform "
+                            f"{view['view_transform']}, look {view['look']}, exposure {view['exposure']:g}, "
+                            f"gamma {view['gamma']:g}, display {view['display_device']}",
+            "view": view, "tiles": tiles,
+            "layout": {"columns": layout.columns, "rows": layout.rows, "size": layout.size,
+                       "label_height": layout.label_height, "title_height": layout.title_height,
+                       "sheet_size": layout.sheet_size},
+            "outputs": {"png": s.output, "json": s.sidecar},
+            "render_seconds": render_seconds, "bpy_version": bpy.app.version_string,
+            "layered_brdf_version": __version__, "command": list(command) if command is not None else None,
+        }
+        with StagedOutputs([s.output, s.sidecar], guard) as staged:
+            with guard.io():
+                save_png(staged.temp(s.output), pixels)
+            guard.check()
+            data["total_seconds"] = time.perf_counter() - t_start
+            with guard.io():
+                write_json(staged.temp(s.sidecar), data)
+            guard.check()
+    total = time.perf_counter() - t_start
+    if log:
+        log(f"wrote {s.output}, {s.sidecar}")
+    return LookdevResult(s.output, s.sidecar, layout, tiles, render_seconds, total, data)
