@@ -1,4 +1,4 @@
-# Two commands: `make demo` renders the gallery, `make test` runs the suite.
+# Two commands: `make demo` renders the look-dev sheet (out/lookdev.png), `make test` runs the suite.
 # Both pick the newest supported Blender/Python pair on this machine -- Blender 5.2 LTS
 # (bpy 5.2.3) on Python 3.13 if a python3.13 runs (on PATH or through pyenv), else
 # Blender 5.0 (bpy 5.0.1) on Python 3.11 -- and create one venv per pair (.venv-5.2,
@@ -32,7 +32,7 @@ EXT_ZIP = dist/layered_brdf-$(shell sed -n 's/^version *= *"\(.*\)"/\1/p' blende
 WHICH = $(PY) -c "import importlib.metadata as m, platform; \
     print('Blender', m.version('bpy'), '(bpy) on Python', platform.python_version(), 'in $(VENV)')"
 
-.PHONY: demo test bench bench-scene extension clean which generated band-fit
+.PHONY: demo test bench bench-scene extension clean which generated band-fit looks-sheet
 
 $(STAMP): pyproject.toml
 	@test -n "$(PYTHON)" || { echo "Blender $(BLENDER) needs Python $(if $(filter 5.2,$(BLENDER)),3.13,3.11), not found" >&2; exit 1; }
@@ -67,6 +67,11 @@ bench: $(STAMP)
 # Render cost per sample on a realistic scene (Suzanne, HDRI + sun; Cycles CPU and EEVEE), 10-15 min.
 bench-scene: $(STAMP)
 	$(PY) benchmarks/bench_scene.py $(BENCH_ARGS)
+
+# Every preset next to its nearest Principled BSDF + Thin Film on the look-dev shader ball:
+# docs/images/presets-vs-principled-thin-film.png (docs/looks.md), a minute or two.
+looks-sheet: $(STAMP)
+	$(PY) benchmarks/looks_sheet.py $(LOOKS_ARGS)
 
 # Blender's extension tool and its tags file are found in the installed bpy.
 extension: $(STAMP)

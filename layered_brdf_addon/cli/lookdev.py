@@ -23,7 +23,9 @@ import numpy as np
 from ..model.params import ParameterError
 from ..model.policy import plan_effects
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset, preset_label
+from .codecs import save_png
 from .gallery import GalleryLayout, compose_sheet, layout_for
+from .render_job import view_png_encoding
 from .requests import int_option
 from .staging import StagedOutputs, TargetError, check_targets, output_stem
 
@@ -119,6 +121,40 @@ def _progress(total: int, enabled: bool):
                 dynamic_ncols=True)
 
 
+def render_tiles(scene, layout: GalleryLayout, tiles: Sequence[tuple[str, Callable[[], None]]], guard=None,
+                 bar=None) -> tuple[np.ndarray, list[float]]:
+    """Render ``scene`` once per tile, after the tile's callable has set it up (put its material
+    on the ball), into the linear grid of ``layout`` (the render boxes); returns the grid
+    (H, W, 3) and each tile's render seconds.  The EXRs go to a temporary folder."""
+    from ..blender import scene as S
+
+    size = layout.size
+    sheet = np.zeros((layout.rows * size, layout.columns * size, 3), np.float32)
+    seconds = []
+    with tempfile.TemporaryDirectory(prefix="lookdev_") as tmp_name:  # in the process's own temp folder
+        for k, (name, setup) in enumerate(tiles):
+            if bar is not None:
+                bar.set_postfix_str(name)
+            if guard is not None:
+                guard.check()
+            setup()
+            exr = Path(tmp_name) / f"{k}.exr"
+            seconds.append(S.render_to_exr(exr, scene, guard))
+            x0, y0, x1, y1 = layout.render_box(k)
+            sheet[y0:y1, x0:x1] = S.passes_from_exr(exr).beauty
+            if bar is not None:
+                bar.update(1)
+    return sheet, seconds
+
+
+def encode_sheet(scene, sheet: np.ndarray, layout: GalleryLayout, labels: Sequence[Sequence[str]],
+                 title: str) -> np.ndarray:
+    """The labelled sheet (8-bit RGB) of a linear grid, encoded by Blender with the scene's view settings."""
+    from ..blender import scene as S
+
+    return np.asarray(compose_sheet(S.encode_view(sheet, scene), layout, labels, title))
+
+
 def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, progress: bool = True,
                    log: Callable[[str], None] | None = None) -> LookdevResult:
     """Render every preset of ``s`` on the shader ball; write the labelled sheet and its sidecar."""
@@ -144,44 +180,33 @@ def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, pro
         S.reset_blender()
         guard.arm()
         scene, ball = L.build_lookdev_scene(size=s.size, samples=s.samples, hdri=hdri.name)
-        sheet = np.zeros((layout.rows * s.size, layout.columns * s.size, 3), np.float32)
-        tiles: list[dict[str, Any]] = []
-        render_seconds = 0.0
+        params = [preset(n) for n in s.presets]
+
+        def assign(name, p):
+            def put() -> None:
+                ball.material_slots[0].material = None  # a material of its own per preset
+                apply_layered_material(ball, p, BACKEND, name=name)
+            return put
+
         bar = _progress(len(s.presets), progress)
         try:
-            # the tiles' EXRs: in the process's own temp folder, which an interrupt removes
-            with tempfile.TemporaryDirectory(prefix="lookdev_") as tmp_name:
-                tmp = Path(tmp_name)
-                for k, name in enumerate(s.presets):
-                    bar.set_postfix_str(name)
-                    guard.check()
-                    ball.material_slots[0].material = None  # a material of its own per preset
-                    params = preset(name)
-                    apply_layered_material(ball, params, BACKEND, name=name)
-                    exr = tmp / f"{k}.exr"
-                    seconds = S.render_to_exr(exr, scene, guard)
-                    render_seconds += seconds
-                    beauty = S.passes_from_exr(exr).beauty
-                    x0, y0, x1, y1 = layout.render_box(k)
-                    sheet[y0:y1, x0:x1] = beauty
-                    tiles.append({"name": name, "label": labels[k], "box": layout.tile_box(k),
-                                  "render_box": layout.render_box(k), "render_seconds": seconds,
-                                  "params": params.to_dict(), "plan": plan_effects(params).key})
-                    bar.update(1)
+            sheet, seconds = render_tiles(scene, layout, [(n, assign(n, p)) for n, p in zip(s.presets, params)],
+                                          guard=guard, bar=bar)
         finally:
             bar.close()
+        render_seconds = sum(seconds)
+        tiles = [{"name": n, "label": labels[k], "box": layout.tile_box(k), "render_box": layout.render_box(k),
+                  "render_seconds": seconds[k], "params": p.to_dict(), "plan": plan_effects(p).key}
+                 for k, (n, p) in enumerate(zip(s.presets, params))]
         guard.check()
         view = S.view_settings_record(scene)
-        pixels = np.asarray(compose_sheet(S.encode_view(sheet, scene), layout, labels, title))
-        from .codecs import save_png
+        pixels = encode_sheet(scene, sheet, layout, labels, title)
 
         data = {
             "format": SIDECAR_FORMAT, "version": SIDECAR_VERSION, "scene": "lookdev", "title": title,
             "hdri": hdri.name, "engine": scene.render.engine, "backend": BACKEND, "size": s.size,
             "samples": s.samples, "seed": scene.cycles.seed, "threads": scene.render.threads,
-            "png_encoding": "8-bit, Blender's colour management of the look-dev scene: view transform "
-                            f"{view['view_transform']}, look {view['look']}, exposure {view['exposure']:g}, "
-                            f"gamma {view['gamma']:g}, display {view['display_device']}",
+            "png_encoding": view_png_encoding(view),
             "view": view, "tiles": tiles,
             "layout": {"columns": layout.columns, "rows": layout.rows, "size": layout.size,
                        "label_height": layout.label_height, "title_height": layout.title_height,
