@@ -83,3 +83,11 @@ extension: $(STAMP)
 
 clean:
 	rm -rf dist out .pytest_cache
+
+# The Asset Browser library of looks (a material asset per preset, with previews) in ASSETS_DIR;
+# add that folder in Blender's Preferences > File Paths > Asset Libraries.
+ASSETS_DIR ?= out/assets
+.PHONY: assets
+assets: $(STAMP)
+	@$(WHICH)
+	$(PY) -m layered_brdf_addon.blender.asset_library $(ASSETS_DIR) $(ASSETS_ARGS)

@@ -25,7 +25,7 @@ from bpy.app.handlers import persistent
 
 from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset_label
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset, preset_label
 from ..backends import node_group as node_group_builder
 from . import material as M
 from . import user_presets
@@ -138,18 +138,20 @@ def _params_of(mat) -> LayeredParams:
 
 
 def identifier_of(mat) -> str | None:
-    """The preset ``mat`` shows: its last loaded preset while its values are still that preset's."""
+    """The preset ``mat`` shows: its last loaded preset while it still has that preset's values,
+    else a built-in preset with its values, else None."""
     from . import properties
 
+    values = _params_of(mat)
     current = properties.settings(mat).preset
-    if not current:
-        return None
-    try:
-        wanted = user_presets.preset_params(current)
-        kind_of(current)
-    except ParameterError:
-        return None
-    return current if _same_values(_params_of(mat), wanted) else None
+    if current:
+        try:
+            kind_of(current)
+            if _same_values(values, user_presets.preset_params(current)):
+                return current
+        except ParameterError:
+            pass
+    return next((name for name in PRESETS if _same_values(values, preset(name))), None)
 
 
 def _same_values(a: LayeredParams, b: LayeredParams) -> bool:
