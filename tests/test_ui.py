@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import layered_brdf_addon
-from layered_brdf_addon.blender import assets, osl, properties, registration, ui, user_presets
+from layered_brdf_addon.blender import osl, properties, registration, ui, user_presets
 from layered_brdf_addon.blender import scene as S
 from layered_brdf_addon.blender import material as M
 from layered_brdf_addon.blender.material import shader_node
@@ -511,24 +511,6 @@ def test_user_presets_save_reuse_in_another_file_and_delete(user_dir):
     with pytest.raises(RuntimeError, match="one of the saved presets"):
         bpy.ops.layered_brdf.load_preset(preset="user:Blue titanium")
     assert user_presets.extension_package() is None  # a checkout: presets live in Blender's config
-
-
-def test_node_group_is_an_asset_with_a_rendered_preview():
-    obj = plain_object()
-    mat = load_preset(obj, "beetle_shell")
-    group = assets.group_of(mat)
-    data = group.asset_data
-    assert data is not None and data.catalog_id == assets.CATALOG_ID
-    plan = properties.desired(mat)[2]
-    assert {t.name for t in data.tags} >= {"Layered BRDF", f"plan {plan.key}"}
-    assert "tilt" in data.description
-    size = tuple(group.preview.image_size)
-    assert size == (assets.PREVIEW_SIZE, assets.PREVIEW_SIZE)
-    px = np.array(group.preview.image_pixels_float[:]).reshape(size[1], size[0], 4)
-    assert px[size[1] // 2, size[0] // 2, 3] > 0.99 and px[0, 0, 3] < 0.01  # a sphere on a clear background
-    assert px[..., :3].max() > 0.2
-    assert [s.name for s in bpy.data.scenes] == ["Scene"]  # the preview scene is gone
-    assert bpy.ops.layered_brdf.mark_asset() == {"FINISHED"}
 
 
 # --- EEVEE -------------------------------------------------------------------------------------
