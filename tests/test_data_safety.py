@@ -240,7 +240,7 @@ def test_keyframes_keep_driving_a_node_rebuilt_without_a_depsgraph_update():
     mat = M.apply_layered_material(obj, params)
     node = shader_node(mat)
     node.name = "My film"
-    sock = node.inputs["ks"]
+    sock = M.param_socket(node, "ks")[0]
     sock.default_value = 0.25
     sock.keyframe_insert("default_value", frame=1)
     sock.default_value = 0.75
@@ -251,11 +251,11 @@ def test_keyframes_keep_driving_a_node_rebuilt_without_a_depsgraph_update():
     node = shader_node(mat)
     assert node.name == "My film"
     paths = list(M._animated_paths(mat.node_tree))
-    assert len(paths) == 1 and mat.node_tree.path_resolve(paths[0].rsplit(".", 1)[0]) == node.inputs["ks"]
+    assert len(paths) == 1 and mat.node_tree.path_resolve(paths[0].rsplit(".", 1)[0]) == M.param_socket(node, "ks")[0]
     assert "ks" in M.animated_parameters(mat)
     for frame, value in ((1, 0.25), (10, 0.75)):
         bpy.context.scene.frame_set(frame)
-        assert shader_node(mat).inputs["ks"].default_value == pytest.approx(value)
+        assert M.input_value(shader_node(mat), "ks") == pytest.approx(value)
 
 
 # --- 7: registration ------------------------------------------------------------------------

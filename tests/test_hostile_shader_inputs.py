@@ -34,6 +34,8 @@ def cases():
     """(label, base params, socket, hostile value or 'linked-nan', value it must equal)."""
     out = []
     for spec in iter_sockets():
+        if spec.component is not None:
+            continue  # a channel of the Base Color socket: the colour's cases below
         base = TILTED if spec.name in TILT_SOCKETS else CORRELATED
         lo, hi = spec.min, spec.max
         out += [(f"{spec.name}=nan", base, spec.name, NAN, lo),
@@ -43,6 +45,7 @@ def cases():
     out += [("Base Color=nan", CORRELATED, "Base Color", (NAN, 0.5, 0.8, 1.0), (0.0, 0.5, 0.8, 1.0)),
             ("Base Color<0", CORRELATED, "Base Color", (-1.0, 0.5, -1e30, 1.0), (0.0, 0.5, 0.0, 1.0)),
             ("Base Color=1e30", CORRELATED, "Base Color", (1e30, 1e30, 2.0, 1.0), (1.0, 1.0, 1.0, 1.0)),
+            ("Base Color=texture nan", CORRELATED, "Base Color", "linked-nan", (0.0, 0.0, 0.0, 1.0)),
             ("Normal=huge", CORRELATED, "Normal", (0.0, -1e30, 4e29), (0.0, -1.0, 0.4)),
             ("Normal=nan", CORRELATED, "Normal", (NAN, -1.0, 0.0), None)]
     return out
@@ -57,9 +60,12 @@ CASES = cases()
 
 
 def _socket(node, name):
-    from layered_brdf_addon.backends.osl_shader import SOCKET_NAMES
+    """A parameter's socket, or the Normal or Base Color socket (the node group's or the OSL name)."""
+    from layered_brdf_addon.blender import material as M
 
-    return node.inputs.get(name) or node.inputs[SOCKET_NAMES[name]]
+    if name in {spec.name for spec in iter_sockets()}:
+        return M.param_socket(node, name)[0]
+    return M._socket(node.inputs, name)
 
 
 def _linked_nan(tree, socket):

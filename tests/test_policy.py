@@ -95,7 +95,7 @@ def test_thick_layer_keyframed_thin_keeps_interference_on_both_frames():
     import bpy
 
     from layered_brdf_addon.blender import scene as S
-    from layered_brdf_addon.blender.material import animated_parameters, apply_layered_material, shader_node
+    from layered_brdf_addon.blender.material import animated_parameters, apply_layered_material, input_value, param_socket, shader_node
     from layered_brdf_reference.closures import closure_shading
     from layered_brdf_reference.compare import agreement, lit_mask
     from layered_brdf_addon.model.sphere import render_spheres
@@ -114,8 +114,9 @@ def test_thick_layer_keyframed_thin_keeps_interference_on_both_frames():
     frames = {1: THICK, 2: THIN}
     for frame, d in frames.items():
         for name in ("d_min", "d_max"):
-            node.inputs[name].default_value = d
-            node.inputs[name].keyframe_insert("default_value", frame=frame)
+            sock = param_socket(node, name)[0]
+            sock.default_value = d
+            sock.keyframe_insert("default_value", frame=frame)
     assert {"d_min", "d_max"} <= animated_parameters(mat)
 
     bpy.context.view_layer.update()  # as after a keyframe in the UI (a rebuild before any update drops the
@@ -130,7 +131,7 @@ def test_thick_layer_keyframed_thin_keeps_interference_on_both_frames():
     means = []
     for frame, d in frames.items():
         scene.frame_set(frame)
-        assert shader_node(mat).inputs["d_min"].default_value == pytest.approx(d)
+        assert input_value(shader_node(mat), "d_min") == pytest.approx(d)
         beauty = S.render_passes().beauty
         params = p.replace(d_min=d, d_max=d)
         expected, geo = render_spheres([params], cam, SUN_40, centers, shading=shaded)

@@ -49,7 +49,7 @@ def swapped_params():
 @pytest.fixture(scope="module", params=BACKENDS)
 def rendered(request):
     from layered_brdf_addon.blender import scene as S
-    from layered_brdf_addon.blender.material import apply_layered_material, shader_node
+    from layered_brdf_addon.blender.material import apply_layered_material, param_socket, shader_node
 
     backend = request.param
     S.reset_blender()
@@ -71,7 +71,7 @@ def rendered(request):
     for socket, value in (("d_min", SWAPPED_MIN), ("d_max", SWAPPED_MAX)):
         v = tree.nodes.new("ShaderNodeValue")
         v.outputs[0].default_value = value
-        tree.links.new(v.outputs[0], node.inputs[socket])
+        tree.links.new(v.outputs[0], param_socket(node, socket)[0])
     # The linked sockets count as animated: re-applying keeps the thickness pattern.
     apply_layered_material(spheres[1], SWAPPED_BASE, backend, name="Swapped")
     passes = S.render_passes_osl() if backend == "osl" else S.render_passes()

@@ -27,6 +27,7 @@ from layered_brdf_reference.closures import closure_shading
 from layered_brdf_reference.compare import agreement, lit_mask
 from layered_brdf_addon.model.params import PARAM_SPECS, iter_sockets
 from layered_brdf_addon.model.policy import plan_effects
+from layered_brdf_addon.model.base_layers import base_node
 from layered_brdf_addon.model.presets import PRESETS
 from layered_brdf_addon.backends import node_group as node_group_builder
 
@@ -81,7 +82,7 @@ def osl_built_for(mat, plan):
 
 def socket_values(mat):
     node = shader_node(mat)
-    return {s.name: node.inputs[s.name].default_value for s in iter_sockets()}
+    return {s.name: M.input_value(node, s.name) for s in iter_sockets()}
 
 
 def expected_closure_form(params_list, cam, centers, passes):
@@ -186,16 +187,17 @@ def test_settings_and_panel_come_from_param_specs():
     drawn = {e[3]: e for e in log if e[0] == "prop"}
     node = shader_node(mat)
     for spec in PARAM_SPECS:
-        text = properties.param_label(spec)
+        sock, channel = M.param_socket(node, spec.name) if spec.socket else (None, None)
+        text = sock.name if channel is not None else properties.param_label(spec)  # a colour: drawn once
         assert text in drawn, f"{spec.name} not drawn"
         data, prop = drawn[text][1], drawn[text][2]
         if spec.socket:  # floats are the shader's own sockets: keyframes on them animate renders
-            assert data == node.inputs[spec.name] and prop == "default_value"
+            assert data == sock and prop == "default_value"
         else:
             assert data == properties.settings(mat) and prop == spec.name
-    assert "Thickness min (nm)" in drawn and "Tilt (\u00b0)" in drawn
+    assert "Thickness min (nm)" in drawn and "Tilt (\u00b0)" in drawn and "Base Color" in drawn
     infos = [e[3].param for e in log if e[0] == "operator" and e[1] == "layered_brdf.param_info"]
-    assert sorted(infos) == sorted(s.name for s in PARAM_SPECS)
+    assert sorted(infos) == sorted(s.name for s in PARAM_SPECS if s.component in (None, 0))
     tip = properties.param_tooltip("d_min")
     assert LayeredParams.spec("d_min").description in tip and "nm" in tip and "2000" in tip
     assert any(e[0] == "menu" and e[1] == "LAYERED_BRDF_MT_presets" for e in log)
@@ -239,12 +241,13 @@ def preset_row(request):
             load_preset(obj, name)  # through the operator
         else:
             properties.apply_to_object(obj, preset(name), backend="osl")
-        if preset(name).base_layer == "transparent":
-            # A transparent film shows the sphere's far wall through it (its own highlights, and
-            # its thickness and lower normal in the AOVs), which the closure form of the front
-            # surface does not hold: the film is compared over an empty base.
+        base_layer = base_node(preset(name))
+        if base_layer is not None:
+            # The closure form holds the layer, not what the add-on puts under it (a transparent
+            # film shows the sphere's far wall through it, a metal base its own reflection): the
+            # layer is compared over an empty base.
             base = M._socket(shader_node(obj.active_material).inputs, "Base Shader")  # group or OSL name
-            assert [link.from_node.bl_idname for link in base.links] == ["ShaderNodeBsdfTransparent"]
+            assert [link.from_node.bl_idname for link in base.links] == [base_layer.node_type]
             obj.active_material.node_tree.links.remove(base.links[0])
     passes = S.render_passes_osl() if backend == "osl" else S.render_passes()
     return SimpleNamespace(backend=backend, names=names, objs=objs, cam=cam, centers=centers, passes=passes)
@@ -272,7 +275,7 @@ def test_socket_and_setting_edits_update_the_shader_without_new_groups(monkeypat
     mat = load_preset(obj, "fig4_parallel")
     node = shader_node(mat)
     pointer, key, groups = node.as_pointer(), built_plan(mat), len(bpy.data.node_groups)
-    node.inputs["d_max"].default_value = 90.0
+    M.param_socket(node, "d_max")[0].default_value = 90.0
     bpy.context.view_layer.update()
     node = shader_node(mat)
     assert node.as_pointer() == pointer and built_plan(mat) == key
@@ -296,21 +299,21 @@ def test_toggling_an_effect_rebuilds_the_tree():
     obj = plain_object()
     mat = load_preset(obj, "fig4_parallel")
     assert built_plan(mat) == "SDNPXB"
-    shader_node(mat).inputs["ks"].default_value = 0.0
+    M.param_socket(shader_node(mat), "ks")[0].default_value = 0.0
     bpy.context.view_layer.update()
     assert built_plan(mat) == "sDNPXB"
     assert shader_node(mat).node_tree.name == node_group_builder.group_name(properties.desired(mat)[2])
     properties.settings(mat).normal_mode = "tilted"
-    shader_node(mat).inputs["tilt"].default_value = 12.0
+    M.param_socket(shader_node(mat), "tilt")[0].default_value = 12.0
     bpy.context.view_layer.update()
     assert built_plan(mat) == "sDNTXB"
     node = shader_node(mat)
-    node.inputs["d_min"].default_value = node.inputs["d_max"].default_value
+    M.param_socket(node, "d_min")[0].default_value = M.input_value(node, "d_max")
     bpy.context.view_layer.update()
     assert built_plan(mat) == "sDCTXB"
     bpy.context.view_layer.update()  # settled: a further update changes nothing
     assert built_plan(mat) == "sDCTXB"
-    assert shader_node(mat).inputs["tilt"].default_value == pytest.approx(12.0)
+    assert M.input_value(shader_node(mat), "tilt") == pytest.approx(12.0)
 
 
 def test_helper_groups_are_hidden_from_the_add_menu():
@@ -354,7 +357,7 @@ def test_a_material_built_before_the_analytic_default_keeps_its_colour_model(tmp
     bpy.ops.wm.open_mainfile(filepath=str(path))
     mat = bpy.data.materials[name]
     assert properties.params_of(mat).accuracy == "rgb"
-    shader_node(mat).inputs["d_max"].default_value = 650.0  # an edit: the material is rebuilt if needed
+    M.param_socket(shader_node(mat), "d_max")[0].default_value = 650.0  # an edit: the material is rebuilt if needed
     bpy.context.view_layer.update()
     assert built_plan(mat) == rgb_plan and properties.settings(mat).accuracy == "rgb"
     assert properties.settings(mat).is_property_set("accuracy")
@@ -364,13 +367,14 @@ def test_animated_driven_or_linked_sockets_keep_their_effects():
     obj = plain_object()
     mat = load_preset(obj, "fig4_parallel")
     node = shader_node(mat)
-    node.inputs["ks"].default_value = 0.0
-    node.inputs["ks"].keyframe_insert("default_value", frame=1)
-    node.inputs["ks"].default_value = 1.0
-    node.inputs["ks"].keyframe_insert("default_value", frame=10)
-    node.inputs["bump_strength"].driver_add("default_value")
+    ks = M.param_socket(node, "ks")[0]
+    ks.default_value = 0.0
+    ks.keyframe_insert("default_value", frame=1)
+    ks.default_value = 1.0
+    ks.keyframe_insert("default_value", frame=10)
+    M.param_socket(node, "bump_strength")[0].driver_add("default_value")
     value = mat.node_tree.nodes.new("ShaderNodeValue")
-    mat.node_tree.links.new(value.outputs[0], node.inputs["kd"])
+    mat.node_tree.links.new(value.outputs[0], M.param_socket(node, "kd")[0])
     assert M.animated_parameters(mat) == {"ks", "bump_strength", "kd"}
     p = preset("fig4_parallel").replace(ks=0.0, kd=0.0, tilt=0.0, normal_mode="tilted")
     assert plan_effects(p, set()).key == "sdNPXB"
@@ -481,7 +485,7 @@ def test_a_linked_material_is_left_untouched_and_the_panel_says_why(tmp_path):
 def test_user_presets_save_reuse_in_another_file_and_delete(user_dir):
     obj = plain_object()
     mat = load_preset(obj, "anodised_titanium")
-    shader_node(mat).inputs["d_max"].default_value = 95.0
+    M.param_socket(shader_node(mat), "d_max")[0].default_value = 95.0
     bpy.ops.layered_brdf.save_preset(name="Blue titanium")
     path = user_dir / "Blue titanium.json"
     data = json.loads(path.read_text())

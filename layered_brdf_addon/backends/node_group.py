@@ -1,7 +1,7 @@
 """The node-group backend: the shading program built as a "Layered BRDF" shader node group.
 
-The group's inputs are the shader parameters of ``LayeredParams`` (the OSL shader's
-names), ``Normal``, ``Base Color`` and ``Base Shader``; its outputs are ``BSDF``,
+The group's inputs are ``Normal``, the shader parameters of ``LayeredParams`` (sockets
+named for people, in panels; the base colour one colour socket) and ``Base Shader``; its outputs are ``BSDF``,
 ``Thickness`` (nm), ``Lower Normal`` and ``Upper Normal`` (world space), the last three
 for AOV passes.  Groups are stamped with :data:`NODE_GROUP_VERSION`, a digest of the
 code that shapes them, and their plan; a stale group is rebuilt in place.
@@ -16,9 +16,10 @@ from ..model.plan import EffectPlan
 from ..model.policy import check_backend
 from .node_ops import Expr, NodeOps
 
-NODE_GROUP_VERSION = 4
+NODE_GROUP_VERSION = 5  # 5: sockets named for people, in panels; the base colour one colour socket
 GROUP_PREFIX = "Layered BRDF"
 STAMP_KEY = "layered_brdf_version"
+OPEN_PANELS = ("Layer", "Specular", "Diffuse")  # open on a new node; Noise and Lower boundary start closed
 PLAN_KEY = "layered_brdf_plan"
 
 
@@ -58,30 +59,47 @@ def ensure_group(plan: EffectPlan):
     group = bpy.data.node_groups.get(name)
     if group is not None and group.library is None and is_current(group, plan):
         return group
-    if group is None or group.library is not None:
-        group = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    if group is not None and group.library is None and group.users == 0:
+        build_into(group, plan)  # nothing uses it: rebuilt in place
+        return group
+    if group is not None and group.library is None:
+        # Other materials still use the stale group: it stays, under another name, until each is
+        # rebuilt from its own sockets (their values, links and keyframes are kept), then goes.
+        group.name = f"{name} (outdated)"
+    group = bpy.data.node_groups.new(name, "ShaderNodeTree")
     build_into(group, plan)
     return group
 
 
 def _interface(group):
+    """The group's sockets: Normal, then one panel per parameter group (the add-on's sub-panels)
+    of sockets named for people, with units as subtypes and the parameters' descriptions as
+    tooltips; the base colour is one colour socket; the Base Shader closes the Diffuse panel."""
     iface = group.interface
     iface.clear()
-    for spec in P_.iter_sockets():
-        s = iface.new_socket(P_.socket_name(spec), in_out="INPUT", socket_type="NodeSocketFloat")
+    s = iface.new_socket("Normal", in_out="INPUT", socket_type="NodeSocketVector")
+    s.hide_value = True
+    s.description = "Upper-boundary normal; the shading normal when not connected"
+    panels = {}
+    for sock in P_.iter_group_sockets():
+        panel = panels.get(sock.group)
+        if panel is None:
+            panel = panels[sock.group] = iface.new_panel(sock.group, default_closed=sock.group not in OPEN_PANELS)
+        if sock.is_color:
+            s = iface.new_socket(sock.name, in_out="INPUT", socket_type="NodeSocketColor", parent=panel)
+            s.default_value = (*(spec.default for spec in sock.specs), 1.0)
+            s.description = P_.BASE_COLOR_DESCRIPTION
+            continue
+        (spec,) = sock.specs
+        s = iface.new_socket(sock.name, in_out="INPUT", socket_type="NodeSocketFloat", parent=panel)
+        s.subtype = spec.subtype
         s.default_value = spec.default
         s.min_value = max(spec.min, -3.0e38)
         s.max_value = min(spec.max, 3.0e38)
         unit = f" ({spec.unit})" if spec.unit else ""
-        s.description = f"{spec.label}{unit}: {spec.description}"
-    s = iface.new_socket("Normal", in_out="INPUT", socket_type="NodeSocketVector")
-    s.hide_value = True
-    s.description = "Upper-boundary normal; the shading normal when not connected"
-    s = iface.new_socket("Base Color", in_out="INPUT", socket_type="NodeSocketColor")
-    s.default_value = (1.0, 1.0, 1.0, 1.0)
-    s.description = "Multiplies the diffuse base colour (plug a texture here)"
-    s = iface.new_socket("Base Shader", in_out="INPUT", socket_type="NodeSocketShader")
-    s.description = "The artist's own material under the layer; it receives the transmitted 1 - F"
+        s.description = f"{spec.description}{unit}. {spec.allowed[0].upper()}{spec.allowed[1:]}"
+    s = iface.new_socket("Base Shader", in_out="INPUT", socket_type="NodeSocketShader", parent=panels["Diffuse"])
+    s.description = "Your own material under the layer; it receives what the top boundary transmits, 1 - F"
     iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
     s = iface.new_socket("Thickness", in_out="OUTPUT", socket_type="NodeSocketFloat")
     s.description = "Layer thickness d in nm"
@@ -100,11 +118,14 @@ class GroupOps(NodeOps):
         self._geometry = None
 
     def input(self, name):
-        return Expr(self, self.gin.outputs[name], "vector" if name == "Normal" else "float", 0)
-
-    def input_color(self, name):
-        sep, dd = self.node("ShaderNodeSeparateColor", {"Color": Expr(self, self.gin.outputs[name], "vector", 0)})
-        return tuple(self.out(sep, dd, k, "float") for k in range(3))
+        if name == "Normal":
+            return Expr(self, self.gin.outputs[name], "vector", 0)
+        spec = P_.LayeredParams.spec(name)
+        socket = self.gin.outputs[P_.group_socket_name(spec)]
+        if spec.component is None:
+            return Expr(self, socket, "float", 0)
+        sep, dd = self.node("ShaderNodeSeparateColor", {"Color": Expr(self, socket, "vector", 0)})
+        return self.out(sep, dd, spec.component, "float")
 
     def _geo(self, socket):
         node, _ = self.node("ShaderNodeNewGeometry", depth=0) if self._geometry is None else (self._geometry, 0)

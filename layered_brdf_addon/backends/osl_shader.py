@@ -16,7 +16,7 @@ from ..model.plan import EffectPlan
 from ..model.policy import check_backend
 from .osl_ops import OslOps, Val, _run_capturing_locals, literal
 
-OSL_VERSION = 2
+OSL_VERSION = 3  # 3: the base colour one colour parameter (BaseColor), no tint
 SHADER_NAME = "layered_brdf"
 
 # Shader parameters and outputs besides the material's parameters (OSL names have no spaces;
@@ -153,11 +153,12 @@ class ShaderOps(OslOps):
     """OSL ops in the shader body: the shader's parameters and globals."""
 
     def input(self, name):
-        return self.atom(SOCKET_NAMES.get(name, name), "vector" if name == "Normal" else "float")
-
-    def input_color(self, name):
-        osl = SOCKET_NAMES[name]
-        return tuple(self.atom(f"{osl}[{k}]", "float") for k in range(3))
+        if name == "Normal":
+            return self.atom(name, "vector")
+        spec = P_.LayeredParams.spec(name)
+        if spec.component is not None:  # a channel of a colour parameter
+            return self.atom(f"{SOCKET_NAMES[P_.group_socket_name(spec)]}[{spec.component}]", "float")
+        return self.atom(P_.socket_name(spec), "float")
 
     def shading_normal(self):
         return self.atom("N", "vector")
@@ -179,17 +180,21 @@ class ShaderOps(OslOps):
 
 
 def _parameter_lines() -> list[str]:
-    lines = []
-    for spec in P_.iter_sockets():
+    lines = ["normal Normal = N"]
+    for sock in P_.iter_group_sockets():
+        if sock.is_color:
+            default = ", ".join(literal(spec.default) for spec in sock.specs)
+            lines.append(f"color {SOCKET_NAMES[sock.name]} = color({default})\n"
+                         f'      [[ string label = "{sock.name}", string help = "{P_.BASE_COLOR_DESCRIPTION}" ]]')
+            continue
+        (spec,) = sock.specs
         unit = f" ({spec.unit})" if spec.unit else ""
-        meta = [f'string label = "{spec.label}{unit}"', f'string help = "{spec.description}"',
+        meta = [f'string label = "{sock.name}"', f'string help = "{spec.description}{unit}"',
                 f"float min = {literal(spec.min)}", f"float max = {literal(spec.max)}"]
         if spec.soft_min is not None:
             meta += [f"float slidermin = {literal(spec.soft_min)}", f"float slidermax = {literal(spec.soft_max)}"]
         lines.append(f"float {P_.socket_name(spec)} = {literal(spec.default)}\n      [[ {', '.join(meta)} ]]")
     lines += [
-        "normal Normal = N",
-        "color BaseColor = color(1.0)",
         "closure color Base = 0",
         "output closure color BSDF = 0",
         "output float Thickness = 0",

@@ -5,7 +5,7 @@ import re
 
 import bpy
 
-from ..model.params import ParameterError, LayeredParams, iter_sockets
+from ..model.params import ParameterError, LayeredParams, group_socket_name, iter_sockets
 from ..model.plan import EffectPlan
 from ..model import policy
 from ..model.policy import plan_effects
@@ -164,24 +164,82 @@ def _claim(mat):
     return shader, own
 
 
+def param_socket(node, name: str):
+    """``(socket, channel)`` of parameter ``name`` on the add-on's shader node (``channel``: the
+    parameter's channel of a colour socket, else None), or ``(None, None)``.
+
+    The node group's sockets are named for people ("Thickness Min", the base colour one "Base
+    Color"), the OSL shader's after the parameters ("d_min", "BaseColor"); a node an older
+    version built has one float socket per parameter, named after it."""
+    spec = LayeredParams.spec(name)
+    sock = node.inputs.get(spec.name)
+    if sock is not None:
+        return sock, None
+    label = group_socket_name(spec)
+    for candidate in (label, SOCKET_NAMES.get(label, "")):
+        sock = node.inputs.get(candidate)
+        if sock is not None:
+            return sock, spec.component
+    return None, None
+
+
+def _legacy_tint(node):
+    """An older node's tint ("Base Color" multiplied its base_r, base_g, base_b), or None."""
+    if node.inputs.get("base_r") is None:
+        return None
+    return _socket(node.inputs, "Base Color")
+
+
 def set_inputs(node, params: LayeredParams) -> None:
     """Write parameter values into the shader node's input sockets (the source of truth)."""
     for spec in iter_sockets():
-        sock = node.inputs.get(spec.name)
+        sock, channel = param_socket(node, spec.name)
         if sock is None:
-            raise RuntimeError(f"shader node lacks the input '{spec.name}'")
-        sock.default_value = float(getattr(params, spec.name))
+            raise RuntimeError(f"shader node lacks the input of '{spec.name}' ({group_socket_name(spec)})")
+        value = float(getattr(params, spec.name))
+        if channel is None:
+            sock.default_value = value
+        else:
+            colour = list(sock.default_value)
+            colour[channel] = value
+            sock.default_value = colour
+
+
+def input_value(node, name: str) -> float:
+    """The value of parameter ``name`` in the shader node's sockets (an older node's base colour
+    times its tint, as it rendered)."""
+    sock, channel = param_socket(node, name)
+    value = float(sock.default_value if channel is None else sock.default_value[channel])
+    tint = _legacy_tint(node) if name in BASE_CHANNELS else None
+    if tint is not None and not tint.is_linked:
+        value *= float(tint.default_value[BASE_CHANNELS.index(name)])
+    return value
+
+
+def input_linked(node, name: str) -> bool:
+    """Whether a link feeds parameter ``name``'s socket."""
+    sock, _ = param_socket(node, name)
+    return sock is not None and sock.is_linked
 
 
 def read_inputs(node, base: LayeredParams | None = None) -> LayeredParams:
     """Parameters from the shader node's sockets (enums from the material's stored settings)."""
-    values = {spec.name: float(node.inputs[spec.name].default_value) for spec in iter_sockets()}
+    values = {spec.name: input_value(node, spec.name) for spec in iter_sockets()}
     return LayeredParams.from_dict(values, base=base or LayeredParams())
 
 
+def socket_parameters(node, socket_name: str) -> list[str]:
+    """The parameters an input socket of the shader node holds (a colour socket: three)."""
+    return [spec.name for spec in iter_sockets()
+            if (sock := param_socket(node, spec.name)[0]) is not None and sock.name == socket_name]
+
+
 OWN_PREFIX = "Layered BRDF"  # nodes the add-on creates (and may delete); the artist's are kept
-# The node group's socket names and the OSL shader's, either way round.
+BASE_CHANNELS = ("base_r", "base_g", "base_b")
+# The node group's socket names and the OSL shader's, either way round; a float parameter's
+# socket in the group ("Thickness Min") and in the OSL shader and older groups ("d_min").
 _SOCKET_ALIASES = {k: v for k, v in SOCKET_NAMES.items() if k != v}
+_SOCKET_ALIASES.update({spec.name: group_socket_name(spec) for spec in iter_sockets() if spec.component is None})
 _SOCKET_ALIASES.update({v: k for k, v in list(_SOCKET_ALIASES.items())})
 
 
@@ -201,6 +259,7 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
     tree = mat.node_tree
     keep_in, keep_out = [], []
     name, label, width, parent, location = SHADER_NODE, SHADER_NODE, 220, None, None
+    legacy_base = None
     if old is not None:
         for sock in old.inputs:
             for link in sock.links:
@@ -214,6 +273,10 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
         location = tuple(old.location)
         old_inputs = [sock.name for sock in old.inputs]
         stashed = _stash_animation(mat, old.name)
+        legacy_base = _legacy_base_links(old)
+        if legacy_base is not None:
+            handled = {*BASE_CHANNELS, _legacy_tint(old).name}
+            keep_in = [(src, sock_name) for src, sock_name in keep_in if sock_name not in handled]
     for n in own:
         tree.nodes.remove(n)
     out = _active_output(tree)
@@ -249,6 +312,8 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
             tree.links.new(source, to_socket)
     if old is not None:
         _restore_animation(mat, stashed, node, old_inputs)
+    if legacy_base is not None:
+        _link_legacy_base(tree, node, *legacy_base)
     base_in = _socket(node.inputs, "Base Shader")
     spec = base_node(params)
     if spec is not None and base_in is not None and not base_in.is_linked:
@@ -272,6 +337,55 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
         _stamp(aov, "aov")
         tree.links.new(src, aov.inputs[kind])
     return node
+
+
+def _legacy_base_links(old):
+    """An older node whose base colour channels or tint are linked: ``(channels, tint)``, each a
+    linked output socket or the socket's value; None when nothing there is linked (then the
+    values carry over through :func:`read_inputs`)."""
+    tint = _legacy_tint(old)
+    if tint is None:
+        return None
+    socks = [old.inputs[c] for c in BASE_CHANNELS]
+    if not tint.is_linked and not any(sock.is_linked for sock in socks):
+        return None
+    source = lambda sock: sock.links[0].from_socket if sock.is_linked else tuple(sock.default_value) \
+        if sock.type == "RGBA" else float(sock.default_value)
+    return [source(sock) for sock in socks], source(tint)
+
+
+def _link_legacy_base(tree, node, channels, tint) -> None:
+    """What fed an older node's base colour channels and tint, rebuilt as the artist's own nodes
+    (Combine Color, times the tint) feeding the one Base Color socket: the same colour."""
+    target = _socket(node.inputs, "Base Color")
+    x, y = node.location[0] - 420, node.location[1] - 200
+    combine = tree.nodes.new("ShaderNodeCombineColor")
+    combine.label = "Base Color (from an older Layered BRDF)"
+    combine.location = (x, y)
+    made = [combine]
+    for k, value in enumerate(channels):
+        if isinstance(value, float):
+            combine.inputs[k].default_value = value
+        else:
+            tree.links.new(value, combine.inputs[k])
+    result = combine.outputs[0]
+    if not isinstance(tint, tuple) or any(abs(c - 1.0) > 0.0 for c in tint[:3]):
+        mix = tree.nodes.new("ShaderNodeMix")
+        mix.data_type = "RGBA"
+        mix.blend_type = "MULTIPLY"
+        mix.label = "Base tint (from an older Layered BRDF)"
+        mix.location = (x + 200, y)
+        made.append(mix)
+        mix.inputs["Factor"].default_value = 1.0
+        tree.links.new(result, mix.inputs[6])
+        if isinstance(tint, tuple):
+            mix.inputs[7].default_value = tint
+        else:
+            tree.links.new(tint, mix.inputs[7])
+        result = mix.outputs[2]
+    for n in made:
+        n.parent = node.parent
+    tree.links.new(result, target)
 
 
 def _shader_output(node):
@@ -357,21 +471,32 @@ _INPUT_NAME = re.compile(r'\.inputs\["((?:[^"\\]|\\.)*)"\]')
 
 def _restore_animation(mat, stashed, node, old_inputs) -> None:
     """Re-point stashed fcurves at ``node``, input sockets by name (their order may differ)."""
+    params = {spec.name for spec in iter_sockets()}
+
+    def new_input(old_name):
+        if old_name in params:  # an older node's socket of a parameter: maybe a colour's channel now
+            return param_socket(node, old_name)
+        return _socket(node.inputs, old_name), None
+
     for fc, prefix, rest in stashed:
         m = _INPUT_INDEX.match(rest)
+        sock, channel = None, None
         if m is not None:
             i = int(m.group(1))
-            sock = _socket(node.inputs, old_inputs[i]) if i < len(old_inputs) else None
+            if i < len(old_inputs):
+                sock, channel = new_input(old_inputs[i])
             if sock is not None:
                 index = next(k for k, s in enumerate(node.inputs) if s == sock)
                 rest = f".inputs[{index}]" + rest[m.end():]
         else:
             m = _INPUT_NAME.match(rest)
             if m is not None:
-                sock = _socket(node.inputs, m.group(1))
+                sock, channel = new_input(m.group(1))
                 if sock is not None:
                     rest = f'.inputs["{sock.name}"]' + rest[m.end():]
         fc.data_path = prefix + _node_prefix(node.name) + rest
+        if channel is not None:
+            fc.array_index = channel
 
 
 # --- the add-on's own data blocks -------------------------------------------------------------
@@ -447,7 +572,7 @@ def animated_parameters(mat) -> set[str]:
     node = shader_node(mat)
     if node is None:
         return set()
-    names = {s.name for s in iter_sockets() if node.inputs[s.name].is_linked}
+    names = {s.name for s in iter_sockets() if input_linked(node, s.name)}
     prefixes = ((mat.node_tree, ""), (mat, "node_tree."))
     for owner, prefix in prefixes:
         for path in _animated_paths(owner):
@@ -460,11 +585,11 @@ def animated_parameters(mat) -> set[str]:
             if index.isdigit():
                 i = int(index)
                 if i < len(node.inputs):
-                    names.add(node.inputs[i].name)
+                    names.update(socket_parameters(node, node.inputs[i].name))
             else:
                 key = index[1:-1]
-                sock = node.inputs.get(key)
-                names.add(sock.name if sock is not None else key)
+                sock = _socket(node.inputs, key)
+                names.update(socket_parameters(node, sock.name) if sock is not None else [key])
     return names & {s.name for s in iter_sockets()}
 
 

@@ -26,7 +26,11 @@ def draw_param(layout, mat, node, spec) -> None:
     row = layout.row(align=True)
     text = properties.param_label(spec)
     if spec.socket:
-        sock = node.inputs[spec.name]
+        sock, channel = M.param_socket(node, spec.name)
+        if channel is not None:  # a channel of a colour socket: the colour is drawn once, as a colour
+            if channel != 0:
+                return
+            text = sock.name
         if sock.is_linked:
             row.label(text=f"{text}: from a link", icon="LINKED")
         else:

@@ -208,14 +208,12 @@ class ShadingPoint:
     object's 3x3 linear part (object to world), identity by default.
     """
 
-    def __init__(self, inputs, normal, incoming, p_object, matrix=None, base_color=(1.0, 1.0, 1.0),
-                 normal_input=(0.0, 0.0, 0.0)):
+    def __init__(self, inputs, normal, incoming, p_object, matrix=None, normal_input=(0.0, 0.0, 0.0)):
         self.inputs = dict(inputs)
         self.normal = vec(normal)
         self.view = vec(np.broadcast_to(np.asarray(incoming, dtype=float), np.shape(normal)))
         self.p_object = vec(p_object)
         self.matrix = np.eye(3) if matrix is None else np.asarray(matrix, dtype=float)[:3, :3]
-        self.base_color = base_color
         self.normal_input = normal_input
 
     def __getattr__(self, name):  # the arithmetic of the module
@@ -233,9 +231,6 @@ class ShadingPoint:
         if name == "Normal":
             return vec(np.broadcast_to(np.asarray(self.normal_input, dtype=float), np.shape(self.normal)))
         return np.asarray(self.inputs[name], dtype=float)
-
-    def input_color(self, name):
-        return tuple(np.asarray(c, dtype=float) for c in self.base_color)
 
     def shading_normal(self):
         return self.normal

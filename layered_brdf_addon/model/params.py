@@ -46,6 +46,9 @@ class ParamSpec:
     options: tuple[str, ...] = ()
     socket: bool = True  # an input socket of the shader (animatable)
     group: str = "Layer"
+    socket_label: str = ""  # the node group's socket (a colour socket holds several parameters)
+    subtype: str = "NONE"  # the socket's Blender subtype: "WAVELENGTH" (nm), "FACTOR" (0-1 slider)
+    component: int | None = None  # the parameter's channel of a colour socket
 
     @property
     def allowed(self) -> str:
@@ -84,11 +87,12 @@ def _fmt(x: float) -> str:
 
 
 def _p(default, label, description, *, unit="", range=(-math.inf, math.inf), soft=None,
-       options=(), socket=True, group="Layer"):
+       options=(), socket=True, group="Layer", socket_label="", subtype="NONE", component=None):
     kind = "enum" if options else ("bool" if isinstance(default, bool) else "float")
     meta = dict(label=label, description=description, unit=unit, min=range[0], max=range[1],
                 soft_min=None if soft is None else soft[0], soft_max=None if soft is None else soft[1],
-                options=tuple(options), socket=socket and kind == "float", group=group, kind=kind)
+                options=tuple(options), socket=socket and kind == "float", group=group, kind=kind,
+                socket_label=socket_label, subtype=subtype, component=component)
     return field(default=default, metadata={"layered": meta})
 
 
@@ -97,6 +101,11 @@ NORMAL_MODES = ("parallel", "tilted", "correlated")
 LOBES = ("beckmann", "phong")
 BASE_LAYERS = ("none", "transparent", "metal")
 ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
+
+# The node group's colour socket of the base colour (base_r, base_g, base_b), and its tooltip.
+BASE_COLOR_SOCKET = "Base Color"
+BASE_COLOR_DESCRIPTION = ("Colour of the diffuse part under the layer, and of a metal base: plug a texture here "
+                          "(each channel is kept within 0-1)")
 
 # What an artist reads for each option of the enum parameters (menus, CLI help).
 OPTION_LABELS = {
@@ -128,50 +137,55 @@ class LayeredParams:
 
     # --- the layer -------------------------------------------------------
     r1_r: float = _p(1.4, "Index R", "Refractive index of the layer at 645 nm (red)",
-                     range=(0.1, 5.0), soft=(1.0, 2.5))
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Red)")
     r1_g: float = _p(1.45, "Index G", "Refractive index of the layer at 525 nm (green)",
-                     range=(0.1, 5.0), soft=(1.0, 2.5))
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Green)")
     r1_b: float = _p(1.6, "Index B", "Refractive index of the layer at 445 nm (blue)",
-                     range=(0.1, 5.0), soft=(1.0, 2.5))
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Blue)")
     r0: float = _p(1.0, "Outside index", "Refractive index of the medium above the layer (air is 1)",
-                   range=(0.1, 5.0), soft=(1.0, 1.5))
+                   range=(0.1, 5.0), soft=(1.0, 1.5), socket_label="Outside IOR")
     d_min: float = _p(66.0, "Thickness min", "Thinnest layer thickness", unit="nm",
-                      range=(0.0, 1.0e6), soft=(0.0, 2000.0))
+                      range=(0.0, 1.0e6), soft=(0.0, 2000.0), socket_label="Thickness Min", subtype="WAVELENGTH")
     d_max: float = _p(76.0, "Thickness max", "Thickest layer thickness", unit="nm",
-                      range=(0.0, 1.0e6), soft=(0.0, 2000.0))
+                      range=(0.0, 1.0e6), soft=(0.0, 2000.0), socket_label="Thickness Max", subtype="WAVELENGTH")
     thickness_mode: str = _p("noise", "Thickness pattern",
                              "How thickness varies: 'noise' (Perlin fBm) or 'height' (thicker downwards)",
                              options=THICKNESS_MODES)
     noise_scale: float = _p(4.0, "Noise scale", "Scale of the thickness noise in object space",
-                            range=(1.0e-4, 1.0e4), soft=(0.1, 50.0), group="Noise")
+                            range=(1.0e-4, 1.0e4), soft=(0.1, 50.0), group="Noise", socket_label="Noise Scale")
     noise_detail: float = _p(2.0, "Noise detail", "Octaves of the thickness noise",
-                             range=(0.0, 15.0), soft=(0.0, 8.0), group="Noise")
+                             range=(0.0, 15.0), soft=(0.0, 8.0), group="Noise", socket_label="Noise Detail")
     noise_roughness: float = _p(0.5, "Noise roughness", "Amplitude ratio of successive octaves",
-                                range=(0.0, 1.0), group="Noise")
+                                range=(0.0, 1.0), group="Noise", socket_label="Noise Roughness", subtype="FACTOR")
     noise_phase: float = _p(0.0, "Noise phase", "Fourth noise coordinate (W): animate it to make the pattern flow",
-                            range=(-1.0e5, 1.0e5), soft=(-10.0, 10.0), group="Noise")
+                            range=(-1.0e5, 1.0e5), soft=(-10.0, 10.0), group="Noise", socket_label="Noise Phase")
     # --- the lower boundary ---------------------------------------------
     normal_mode: str = _p("parallel", "Lower normal",
                           "Lower boundary normal: 'parallel', constant 'tilted', or 'correlated' with the thickness gradient",
                           options=NORMAL_MODES)
     tilt: float = _p(0.0, "Tilt", "Angle between the lower and upper boundary normals", unit="deg",
-                     range=(0.0, 180.0), soft=(0.0, 30.0), group="Lower boundary")
+                     range=(0.0, 180.0), soft=(0.0, 30.0), group="Lower boundary", socket_label="Tilt (°)")
     tilt_azimuth: float = _p(0.0, "Tilt azimuth", "Rotation of the tilt axis about the normal", unit="deg",
-                             range=(-360.0, 360.0), group="Lower boundary")
+                             range=(-360.0, 360.0), group="Lower boundary", socket_label="Tilt Azimuth (°)")
     bump_strength: float = _p(5.0e-4, "Bump strength",
-                              "Lower-normal bend per unit thickness gradient (object units per nm)",
-                              unit="1/nm", range=(0.0, 1.0e3), soft=(0.0, 0.01), group="Lower boundary")
+                              "How far the lower normal bends per unit of thickness gradient (object units)",
+                              unit="1/nm", range=(0.0, 1.0e3), soft=(0.0, 0.01), group="Lower boundary",
+                              socket_label="Bump Strength (per nm)")
     # --- specular and diffuse --------------------------------------------
     e0: float = _p(90.0, "Upper exponent", "Phong exponent of the upper boundary (higher is sharper)",
-                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular")
+                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular", socket_label="Upper Exponent")
     e1: float = _p(170.0, "Lower exponent", "Phong exponent of the lower boundary, inside the layer",
-                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular")
+                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular", socket_label="Lower Exponent")
     ks: float = _p(1.0, "Specular weight", "Weight of the specular (Phong-like) part",
-                   range=(0.0, 1.0), group="Specular")
-    kd: float = _p(0.7, "Diffuse weight", "Weight of the diffuse part", range=(0.0, 1.0), group="Diffuse")
-    base_r: float = _p(0.8, "Base R", "Diffuse base colour, red", range=(0.0, 1.0), group="Diffuse")
-    base_g: float = _p(0.8, "Base G", "Diffuse base colour, green", range=(0.0, 1.0), group="Diffuse")
-    base_b: float = _p(0.8, "Base B", "Diffuse base colour, blue", range=(0.0, 1.0), group="Diffuse")
+                   range=(0.0, 1.0), group="Specular", socket_label="Specular Weight", subtype="FACTOR")
+    kd: float = _p(0.7, "Diffuse weight", "Weight of the diffuse part", range=(0.0, 1.0), group="Diffuse",
+                   socket_label="Diffuse Weight", subtype="FACTOR")
+    base_r: float = _p(0.8, "Base R", "Diffuse base colour, red", range=(0.0, 1.0), group="Diffuse",
+                       socket_label=BASE_COLOR_SOCKET, component=0)
+    base_g: float = _p(0.8, "Base G", "Diffuse base colour, green", range=(0.0, 1.0), group="Diffuse",
+                       socket_label=BASE_COLOR_SOCKET, component=1)
+    base_b: float = _p(0.8, "Base B", "Diffuse base colour, blue", range=(0.0, 1.0), group="Diffuse",
+                       socket_label=BASE_COLOR_SOCKET, component=2)
     base_layer: str = _p("none", "Base shader",
                          "What lies under the layer besides the diffuse part: 'none' (leave the Base Shader "
                          "input to the artist), 'transparent' (a soap film) or 'metal' (a metal of the base "
@@ -251,5 +265,31 @@ def iter_sockets() -> Iterator[ParamSpec]:
 
 
 def socket_name(spec: ParamSpec) -> str:
-    """Name of the shader input (OSL parameter / node-group socket) of a parameter."""
+    """Name of the OSL shader's parameter of a parameter (an identifier)."""
     return spec.name
+
+
+def group_socket_name(spec: ParamSpec) -> str:
+    """Name of the node group's input socket of a parameter, for people ("Thickness Min")."""
+    return spec.socket_label or spec.name
+
+
+@dataclass(frozen=True)
+class SocketSpec:
+    """One input socket of the shader: a float parameter, or a colour holding several."""
+
+    name: str  # the node group's socket name
+    specs: tuple[ParamSpec, ...]
+    group: str
+
+    @property
+    def is_color(self) -> bool:
+        return self.specs[0].component is not None
+
+
+def iter_group_sockets() -> Iterator[SocketSpec]:
+    """The shader's parameter sockets in order, a colour's channels together."""
+    seen: dict[str, list[ParamSpec]] = {}
+    for spec in iter_sockets():
+        seen.setdefault(group_socket_name(spec), []).append(spec)
+    return (SocketSpec(name, tuple(specs), specs[0].group) for name, specs in seen.items())

@@ -845,10 +845,10 @@ def clamped_inputs(ops):
             for spec in iter_sockets()}
 
 
-def program_inputs(P, tint=(1.0, 1.0, 1.0)):
+def program_inputs(P):
     """The inputs of :func:`shade` from the per-parameter values ``P``."""
     return dict(r1=(P["r1_r"], P["r1_g"], P["r1_b"]), r0=P["r0"], e0=P["e0"], e1=P["e1"], ks=P["ks"], kd=P["kd"],
-                base=tuple(P[f"base_{c}"] * t for c, t in zip("rgb", tint)))
+                base=(P["base_r"], P["base_g"], P["base_b"]))
 
 
 def base_weight(ops, r1, r0, cos_v):
@@ -872,9 +872,7 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
     p_obj = ops.object_position()
     d = layer_thickness(ops, P, p_obj, plan)
     n1 = lower_normal(ops, P, n0, p_obj, d, plan)
-    # An albedo: each channel within [0, 1], NaN to 0.
-    tint = tuple(ops.clamp_input(c, 0.0, 1.0) for c in ops.input_color("Base Color"))
-    inputs = program_inputs(P, tint)
+    inputs = program_inputs(P)
     res = shade(ops, inputs, n0, n1, d, v, plan)
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     transmitted = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
