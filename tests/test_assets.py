@@ -257,9 +257,11 @@ def test_mark_material_as_asset_catalogs_by_preset_and_its_preview_follows_the_m
     load_preset(obj, "fig3_clay")
     assert mat.asset_data.catalog_id == assets.CATALOGS["paper"].uuid
     assert np.abs(np.array(mat.preview.image_pixels_float[:]) - first).max() > 0.1
-    # Values of no preset: the user catalog.
-    properties.apply_to_object(obj, preset("fig3_clay").replace(d_max=120.0))
+    # Values of no preset: the user catalog (built as a synchronisation does: the preview waits).
+    rendered = np.array(mat.preview.image_pixels_float[:])
+    properties.apply_to_object(obj, preset("fig3_clay").replace(d_max=120.0), preview=False)
     assert mat.asset_data.catalog_id == assets.CATALOGS["user"].uuid
+    assert np.array_equal(np.array(mat.preview.image_pixels_float[:]), rendered)
     assert [s.name for s in bpy.data.scenes] == ["Scene"]  # the preview scene is gone
 
 

@@ -26,8 +26,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import secrets
 import sys
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -204,9 +204,14 @@ def catalog_text(existing: str | None) -> str:
 
 # --- writing ------------------------------------------------------------------------------------
 def _temp_path(directory: Path, suffix: str) -> Path:
-    fd, name = tempfile.mkstemp(prefix=_TEMP_PREFIX, suffix=suffix, dir=directory)
-    os.close(fd)
-    return Path(name)
+    """A new empty file in ``directory`` under a temporary name (permissions as the umask gives)."""
+    while True:
+        path = directory / f"{_TEMP_PREFIX}{secrets.token_hex(6)}{suffix}"
+        try:
+            with open(path, "x"):
+                return path
+        except FileExistsError:
+            continue
 
 
 def _write_text(directory: Path, text: str, suffix: str) -> Path:

@@ -204,10 +204,20 @@ def check_preview_options(size, samples) -> tuple[int, int]:
     return size, samples
 
 
+def _denoise(scene) -> None:
+    """Few samples and Open Image Denoise (when this Blender has it): clean previews, quickly."""
+    import _cycles
+
+    if getattr(_cycles, "with_openimagedenoise", False):
+        scene.cycles.use_denoising = True
+        scene.cycles.denoiser = "OPENIMAGEDENOISE"
+        scene.cycles.denoising_use_gpu = False
+
+
 def render_previews(materials, size: int | None = None, samples: int | None = None,
                     hdri: str | None = None) -> list[float]:
     """Render each of ``materials`` on the look-development shader ball (under a bundled HDRI,
-    transparent background) and write the pixels into its preview.  One scene serves them all
+    transparent background, denoised) and write the pixels into its preview.  One scene serves them all
     and is removed afterwards.  Returns the seconds each render took."""
     import time
 
@@ -225,6 +235,7 @@ def render_previews(materials, size: int | None = None, samples: int | None = No
     try:
         r = scene.render
         r.film_transparent = True  # the preview shows the ball (and its pedestal) on a clear background
+        _denoise(scene)
         r.image_settings.file_format = "PNG"
         r.image_settings.color_mode = "RGBA"
         r.image_settings.color_depth = "8"
