@@ -259,12 +259,11 @@ def _unique_names(identifiers: list[str]) -> dict[str, str]:
     return names
 
 
-def _make_looks(names: dict[str, str]) -> list:
+def _make_looks(names: dict[str, str], made: list) -> None:
     """A material asset per look, named exactly so (a material of the file holding that name is
-    renamed for the moment by the caller)."""
+    renamed for the moment by the caller), appended to ``made`` as it is made."""
     from . import properties
 
-    made = []
     for name, ident in names.items():
         params = user_presets.preset_params(ident)
         mat = bpy.data.materials.new(name)
@@ -276,7 +275,6 @@ def _make_looks(names: dict[str, str]) -> list:
         if mat.name != name:
             raise RuntimeError(f"the look '{name}' was named '{mat.name}'")
         assets.mark_look(mat, ident)
-    return made
 
 
 def write_asset_library(directory, presets=None, preview_size: int = assets.PREVIEW_SIZE,
@@ -292,7 +290,10 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
     t0 = time.perf_counter()
     identifiers = _check_presets(presets)
     if preview_size != 0:
+        from .lookdev import hdri_path
+
         assets.check_preview_options(preview_size, samples)
+        hdri_path(hdri)  # a bundled HDRI, else ParameterError naming 'hdri'
     path = _check_directory(directory)
     names = _unique_names(identifiers)
     if path.exists():
@@ -317,7 +318,7 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
                 if other is not None and other.library is None:
                     other.name = f"{name} (set aside by the Layered BRDF library)"
                     renamed.append((other, name))
-            made = _make_looks(names)
+            _make_looks(names, made)
             if preview_size:
                 result.preview_seconds = assets.render_previews(made, preview_size, samples, hdri)
             if not path.exists():

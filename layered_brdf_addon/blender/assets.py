@@ -244,6 +244,9 @@ def render_previews(materials, size: int | None = None, samples: int | None = No
             path = os.path.join(tmp, "preview.png")
             for mat in materials:
                 slot.material = mat
+                node = M.shader_node(mat)
+                # The OSL backend's materials need Cycles' OSL shading (on the CPU, as the scene renders).
+                scene.cycles.shading_system = node is not None and node.bl_idname == "ShaderNodeScript"
                 t0 = time.perf_counter()
                 render_to_file(path, scene)
                 image = bpy.data.images.load(path, check_existing=False)
