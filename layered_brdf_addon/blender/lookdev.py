@@ -286,19 +286,6 @@ def _populate(scene, size: int, samples: int, engine: str, env_path: Path):
     return ball
 
 
-def lookdev_objects(scene) -> dict[str, Any]:
-    """The objects of a look-dev scene by role: ``ball``, ``pedestal``, ``camera``, ``sun``."""
-    roles = {"LookDevBall": "ball", "LookDevPedestal": "pedestal", "LookDevCamera": "camera", "LookDevSun": "sun"}
-    out = {}
-    for coll, block in _CREATED.get(scene.as_pointer(), []):
-        if coll == "objects":
-            name = block.data.name if block.data is not None else block.name
-            for prefix, role in roles.items():
-                if name.startswith(prefix):
-                    out[role] = block
-    return out
-
-
 def _alive(block) -> bool:
     try:
         block.name
