@@ -96,7 +96,7 @@ def render(output: Path, size: int, samples: int, names, hdri_name, progress: bo
                    ["Principled + Thin Film", principled_label(equivalents[n])]
                    for n in names for k in (0, 1)]
     title = (f"presets (layered, node group) | Principled BSDF + Thin Film \u00b7 {hdri.stem} HDRI + sun "
-             f"\u00b7 Cycles {samples} spp \u00b7 AgX")
+             f"\u00b7 Cycles {samples} spp \u00b7 {scene.view_settings.view_transform}")
     # the label's last line gets the render time: lay out with room for it
     layout = layout_for([lab + ["00.0 s"] for lab in labels_base], size, 2 * PAIRS_PER_ROW, title)
     bar = tqdm(total=len(tiles), desc="looks", unit="tile", disable=not progress, file=sys.stderr)

@@ -174,12 +174,13 @@ def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, pro
         from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, write_json
 
         hdri = L.hdri_path(s.hdri)  # a bad name: ParameterError before anything is made
-        labels = [tile_label(n) for n in s.presets]
-        title = f"layered-brdf look-dev \u00b7 {hdri.stem} HDRI + sun \u00b7 Cycles {s.samples} spp \u00b7 AgX"
-        layout = layout_for(labels, s.size, s.columns, title)
         S.reset_blender()
         guard.arm()
         scene, ball = L.build_lookdev_scene(size=s.size, samples=s.samples, hdri=hdri.name)
+        labels = [tile_label(n) for n in s.presets]
+        title = (f"layered-brdf look-dev \u00b7 {hdri.stem} HDRI + sun \u00b7 Cycles {s.samples} spp \u00b7 "
+                 f"{scene.view_settings.view_transform}")
+        layout = layout_for(labels, s.size, s.columns, title)
         params = [preset(n) for n in s.presets]
 
         def assign(name, p):
