@@ -172,7 +172,10 @@ def test_rewriting_replaces_its_own_files_keeps_other_catalogs_and_the_artists_d
     cats_path = folder / AL.CATALOG_FILE
     foreign = "0d3b8a3c-2d6e-4f5a-9d4e-9d0b5a1c2e3f:Props/Chairs:Props-Chairs"
     cats_path.write_text(cats_path.read_text() + "\n# the artist's catalogs\n" + foreign + "\n")
-    second = AL.write_asset_library(folder, ["glazed_clay", "oil_slick"], preview_size=0)
+    steps = []
+    second = AL.write_asset_library(folder, ["glazed_clay", "oil_slick"], preview_size=0,
+                                    progress=lambda done, total: steps.append((done, total)))
+    assert steps == [(1, 2), (2, 2)]
     assert datablocks() == before
     assert listing(folder) == sorted([AL.LIBRARY_FILE, AL.CATALOG_FILE, AL.MANIFEST_FILE])  # no temporary files
     assert library_names(second.blend) == ["Glazed clay", "Oil slick"]

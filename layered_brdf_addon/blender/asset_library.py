@@ -259,7 +259,7 @@ def _unique_names(identifiers: list[str]) -> dict[str, str]:
     return names
 
 
-def _make_looks(names: dict[str, str], made: list) -> None:
+def _make_looks(names: dict[str, str], made: list, step) -> None:
     """A material asset per look, named exactly so (a material of the file holding that name is
     renamed for the moment by the caller), appended to ``made`` as it is made."""
     from . import properties
@@ -275,10 +275,12 @@ def _make_looks(names: dict[str, str], made: list) -> None:
         if mat.name != name:
             raise RuntimeError(f"the look '{name}' was named '{mat.name}'")
         assets.mark_look(mat, ident)
+        step()
 
 
 def write_asset_library(directory, presets=None, preview_size: int = assets.PREVIEW_SIZE,
-                        samples: int = assets.PREVIEW_SAMPLES, hdri: str | None = None) -> LibraryResult:
+                        samples: int = assets.PREVIEW_SAMPLES, hdri: str | None = None,
+                        progress=None) -> LibraryResult:
     """Write the looks library into ``directory``: ``Layered BRDF Looks.blend`` (a material asset
     per preset of ``presets``, default :func:`default_presets`) and ``blender_assets.cats.txt``.
 
@@ -286,6 +288,7 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
     per pixel under the bundled HDRI ``hdri``.  The folder is made when only it is missing.
     Re-running replaces the library's own files; a ``.blend`` of that name the library did not
     write is never replaced (ParameterError naming ``directory``, nothing written).
+    ``progress(done, total)`` is called as looks are made and previews rendered.
     """
     t0 = time.perf_counter()
     identifiers = _check_presets(presets)
@@ -310,6 +313,14 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
     renamed = []  # the file's own materials holding a look's name, renamed for the moment
     made = []
     temps: list[Path] = []
+    total = len(names) * (2 if preview_size else 1)
+    count = [0]
+
+    def step(*_):
+        count[0] += 1
+        if progress is not None:
+            progress(count[0], total)
+
     created_dir = False
     try:
         with _Registered():
@@ -318,9 +329,9 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
                 if other is not None and other.library is None:
                     other.name = f"{name} (set aside by the Layered BRDF library)"
                     renamed.append((other, name))
-            _make_looks(names, made)
+            _make_looks(names, made, step)
             if preview_size:
-                result.preview_seconds = assets.render_previews(made, preview_size, samples, hdri)
+                result.preview_seconds = assets.render_previews(made, preview_size, samples, hdri, done=step)
             if not path.exists():
                 path.mkdir()
                 created_dir = True
@@ -418,6 +429,10 @@ def _parser():
     return p
 
 
+def _print_progress(done: int, total: int) -> None:
+    print(f"\r{done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
+
+
 def main(argv=None) -> int:
     """Exit codes: 0 written, 2 invalid input (the message names the parameter), 1 another failure."""
     args = _parser().parse_args(argv)
@@ -426,7 +441,7 @@ def main(argv=None) -> int:
         presets = list(presets) + [user_presets.USER_PREFIX + n for n in user_presets.user_preset_names()]
     try:
         result = write_asset_library(args.directory, presets, preview_size=args.preview_size,
-                                     samples=args.samples, hdri=args.hdri)
+                                     samples=args.samples, hdri=args.hdri, progress=_print_progress)
     except ParameterError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

@@ -215,10 +215,11 @@ def _denoise(scene) -> None:
 
 
 def render_previews(materials, size: int | None = None, samples: int | None = None,
-                    hdri: str | None = None) -> list[float]:
+                    hdri: str | None = None, done=None) -> list[float]:
     """Render each of ``materials`` on the look-development shader ball (under a bundled HDRI,
     transparent background, denoised) and write the pixels into its preview.  One scene serves them all
-    and is removed afterwards.  Returns the seconds each render took."""
+    and is removed afterwards.  ``done(material)`` is called after each.  Returns the seconds
+    each render took."""
     import time
 
     import numpy as np
@@ -259,6 +260,8 @@ def render_previews(materials, size: int | None = None, samples: int | None = No
                 preview.image_size = (size, size)
                 preview.image_pixels_float.foreach_set(pixels)
                 seconds.append(time.perf_counter() - t0)
+                if done is not None:
+                    done(mat)
         slot.material = None
     finally:
         lookdev.remove_scene(scene)

@@ -168,6 +168,7 @@ for the Asset Browser; optionally add the folder to Preferences > File Paths > A
     directory: StringProperty(name="Folder", subtype="DIR_PATH",
                               description="The library folder: 'Layered BRDF Looks.blend' and "
                                           "'blender_assets.cats.txt' are written there")
+    filter_folder: BoolProperty(default=True, options={"HIDDEN", "SKIP_SAVE"})
     include_user_presets: BoolProperty(name="Include User Presets", default=True,
                                        description="Also write your saved presets (catalog 'User presets')")
     register_library: BoolProperty(name="Add to Asset Libraries", default=True,
@@ -187,8 +188,14 @@ for the Asset Browser; optionally add the folder to Preferences > File Paths > A
         if not self.directory:
             raise ParameterError("directory", self.directory, "a folder path")
         presets = asset_library.default_presets(include_user=self.include_user_presets)
-        result = asset_library.write_asset_library(self.directory, presets, preview_size=self.preview_size,
-                                                   samples=self.samples)
+        wm = context.window_manager
+        wm.progress_begin(0, 1)
+        try:
+            result = asset_library.write_asset_library(
+                self.directory, presets, preview_size=self.preview_size, samples=self.samples,
+                progress=lambda done, total: wm.progress_update(done / total))
+        finally:
+            wm.progress_end()
         message = f"{len(result.assets)} looks written to {result.blend}"
         if self.register_library:
             lib, added = asset_library.register_library(result.directory)
