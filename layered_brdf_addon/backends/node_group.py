@@ -175,33 +175,35 @@ def build_into(group, plan: EffectPlan) -> None:
     extras = res.extras
     n0 = extras["upper_normal"]
 
-    shaders = []
-    if res.diffuse is not None:
-        col, dd = ops.node("ShaderNodeCombineColor", {"Red": res.diffuse[0], "Green": res.diffuse[1],
-                                                      "Blue": res.diffuse[2]})
-        bsdf, dd = ops.node("ShaderNodeBsdfDiffuse", {"Color": ops.out(col, dd, 0, "vector"), "Roughness": 0.0,
-                                                      "Normal": n0})
-        shaders.append(ops.out(bsdf, dd, 0, "shader"))
-    for cl in res.glossy:
-        col, dd = ops.node("ShaderNodeCombineColor", {"Red": cl.weight[0], "Green": cl.weight[1],
-                                                      "Blue": cl.weight[2]})
-        rough = ops.sqrt(ops.clamp(cl.alpha, 0.0, 1.0))  # the Glossy node's Roughness is sqrt(alpha)
-        inputs = {"Color": ops.out(col, dd, 0, "vector"), "Roughness": rough, "Normal": cl.normal}
-        if cl.tangent is not None:
-            inputs.update({"Anisotropy": cl.anisotropy, "Tangent": cl.tangent})
-        bsdf, dd = ops.node("ShaderNodeBsdfGlossy", inputs, distribution="BECKMANN")
-        bsdf.label = cl.name
-        shaders.append(ops.out(bsdf, dd, 0, "shader"))
-    mix, dd = ops.node("ShaderNodeMixShader", {"Fac": extras["base_weight"]})
-    group.links.new(gin.outputs["Base Shader"], mix.inputs[2])
-    shaders.append(ops.out(mix, dd, 0, "shader"))
-    total = None
-    for s in shaders:
-        if total is None:
-            total = s
-            continue
-        n, dd = ops.node("ShaderNodeAddShader", {0: total, 1: s})
-        total = ops.out(n, dd, 0, "shader")
+    with ops.stage("Closures: diffuse, glossy lobes and your Base Shader, added"):
+        shaders = []
+        if res.diffuse is not None:
+            col, dd = ops.node("ShaderNodeCombineColor", {"Red": res.diffuse[0], "Green": res.diffuse[1],
+                                                          "Blue": res.diffuse[2]})
+            bsdf, dd = ops.node("ShaderNodeBsdfDiffuse", {"Color": ops.out(col, dd, 0, "vector"), "Roughness": 0.0,
+                                                          "Normal": n0})
+            shaders.append(ops.out(bsdf, dd, 0, "shader"))
+        for cl in res.glossy:
+            col, dd = ops.node("ShaderNodeCombineColor", {"Red": cl.weight[0], "Green": cl.weight[1],
+                                                          "Blue": cl.weight[2]})
+            rough = ops.sqrt(ops.clamp(cl.alpha, 0.0, 1.0))  # the Glossy node's Roughness is sqrt(alpha)
+            inputs = {"Color": ops.out(col, dd, 0, "vector"), "Roughness": rough, "Normal": cl.normal}
+            if cl.tangent is not None:
+                inputs.update({"Anisotropy": cl.anisotropy, "Tangent": cl.tangent})
+            bsdf, dd = ops.node("ShaderNodeBsdfGlossy", inputs, distribution="BECKMANN")
+            bsdf.label = cl.name
+            shaders.append(ops.out(bsdf, dd, 0, "shader"))
+        mix, dd = ops.node("ShaderNodeMixShader", {"Fac": extras["base_weight"]})
+        group.links.new(gin.outputs["Base Shader"], mix.inputs[2])
+        shaders.append(ops.out(mix, dd, 0, "shader"))
+        total = None
+        for s in shaders:
+            if total is None:
+                total = s
+                continue
+            n, dd = ops.node("ShaderNodeAddShader", {0: total, 1: s})
+            total = ops.out(n, dd, 0, "shader")
+    ops.stack_stages()
     gout.location = (ops.x0 + (max(ops._rows) + 2) * ops.COLUMN, 0.0)
     group.links.new(total.socket, gout.inputs["BSDF"])
     for name, value in (("Thickness", extras["thickness"]), ("Lower Normal", extras["lower_normal"]),

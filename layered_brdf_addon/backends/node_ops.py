@@ -7,6 +7,7 @@ zero gives 0, square roots of negatives 0), which matches ``ops_numpy``.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 from typing import Any
 
@@ -28,11 +29,24 @@ class Expr(Arithmetic):
 _kind = kind_of
 
 
+def _place(node, xy) -> None:
+    """Put ``node`` at ``xy`` in the tree's space (inside a frame too: Blender 4.4+ keeps
+    ``location`` relative to the frame)."""
+    if hasattr(node, "location_absolute"):
+        node.location_absolute = xy
+    else:
+        node.location = xy
+
+
+def _location(node) -> tuple[float, float]:
+    return tuple(node.location_absolute if hasattr(node, "location_absolute") else node.location)
+
+
 class NodeOps:
     """Adds nodes to ``tree``; lays them out in columns by dependency depth."""
 
     COLUMN = 170
-    ROW = 150
+    ROW = 60  # the nodes are collapsed
 
     def __init__(self, tree, x0: float = 0.0, y0: float = 0.0, subgroup_name=None, stamp=""):
         self.tree = tree
@@ -42,6 +56,8 @@ class NodeOps:
         self._rows: dict[int, int] = {}
         self._memo: dict = {}
         self.count = 0
+        self._frame = None  # the frame of the program's stage being built
+        self._stages: list = []  # (frame, {depth: rows}) in build order
 
     # node plumbing ---------------------------------------------------------
     @staticmethod
@@ -77,12 +93,45 @@ class NodeOps:
         d = dmax + 1 if depth is None else depth
         row = self._rows.get(d, 0)
         self._rows[d] = row + 1
-        n.location = (self.x0 + d * self.COLUMN, self.y0 - row * self.ROW)
+        if self._frame is not None:  # rows counted within the stage; stack_stages() moves the bands
+            rows = self._stages[-1][1]
+            row = rows.get(d, 0)
+            rows[d] = row + 1
+            n.parent = self._frame
+        _place(n, (self.x0 + d * self.COLUMN, self.y0 - row * self.ROW))
         n.hide = True
         self.count += 1
         if key is not None:
             self._memo[key] = (n, d)
         return n, d
+
+    @contextlib.contextmanager
+    def stage(self, title):
+        """Nodes built inside are framed together under ``title``, a band of their own."""
+        frame = self.tree.nodes.new("NodeFrame")
+        frame.label = title
+        frame.label_size = 28
+        outer = self._frame
+        self._frame = frame
+        self._stages.append((frame, {}))
+        try:
+            yield frame
+        finally:
+            self._frame = outer
+
+    def stack_stages(self, gap: float = 120.0) -> None:
+        """Move each stage's band of nodes below the previous one, so that the frames don't overlap."""
+        top = self.y0
+        for frame, rows in self._stages:
+            if not rows:  # a stage the plan leaves out (parallel boundaries: no lower normal to build)
+                self.tree.nodes.remove(frame)
+                continue
+            height = max(rows.values(), default=0) * self.ROW
+            for n in self.tree.nodes:
+                if n.parent == frame:
+                    x, y = _location(n)
+                    _place(n, (x, y - self.y0 + top))
+            top -= height + gap
 
     @staticmethod
     def _input(node, key):

@@ -9,6 +9,8 @@ once and not named is written inline; one never used is dropped.  bpy-free.
 """
 from __future__ import annotations
 
+import contextlib
+
 import inspect
 import math
 import re
@@ -114,6 +116,11 @@ class OslOps:
         self.body.statements.append(st)
         self.body.by_token[st.token] = st
         return Val(self, "", kind, st.token)
+
+    def stage(self, title):
+        """A stage of the program (the node backend frames its nodes); the OSL source is already
+        one named function per step."""
+        return contextlib.nullcontext()
 
     def raw(self, text: str) -> None:
         """A statement of the body that is not a value (a closure sum, say)."""

@@ -1,6 +1,7 @@
 """numpy backend of the shading program: scalars (...), vectors (..., 3)."""
 from __future__ import annotations
 
+import contextlib
 import sys
 
 import numpy as np
@@ -227,6 +228,10 @@ class ShadingPoint:
         return fn(self, **args, **static)
 
     # the shading point ---------------------------------------------------------
+    def stage(self, title):
+        """A stage of the program (the node backend frames its nodes): nothing to do here."""
+        return contextlib.nullcontext()
+
     def input(self, name):
         if name == "Normal":
             return vec(np.broadcast_to(np.asarray(self.normal_input, dtype=float), np.shape(self.normal)))

@@ -52,7 +52,7 @@ ARTIST_PRESETS: dict[str, dict] = {
                               e0=800.0, e1=800.0, ks=1.0, kd=0.0, base_layer="metal",
                               base_r=0.22, base_g=0.21, base_b=0.2),
     # Bronze with patchy oxide films (high index, 0-120 nm): rough, tarnished, red-gold to blue patches.
-    "old_metal": dict(r1_r=2.4, r1_g=2.5, r1_b=2.7, d_min=0.0, d_max=120.0, noise_scale=3.0, noise_detail=6.0,
+    "old_metal": dict(r1_r=2.4, r1_g=2.5, r1_b=2.7, d_min=0.0, d_max=120.0, noise_scale=3.0, noise_detail=3.0,
                       noise_roughness=0.6, e0=120.0, e1=120.0, ks=0.6, kd=0.0, base_layer="metal",
                       base_r=0.55, base_g=0.38, base_b=0.2),
     # Terracotta under a glossy glaze thick enough for a soft pink-blue sheen on the reflections.

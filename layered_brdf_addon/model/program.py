@@ -864,17 +864,22 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
     ``extras`` carries the shader's other outputs: ``thickness`` (nm), ``lower_normal``,
     ``upper_normal`` (world space) and ``base_weight`` (the factor of the Base Shader input).
     """
-    P = clamped_inputs(ops)
-    # A zero-length or NaN Normal input (unconnected, or a broken texture) falls back to
-    # the shading normal.
-    n0 = ops.normalize(direction_input(ops, ops.input("Normal")), ops.shading_normal())
-    v = ops.incoming()
-    p_obj = ops.object_position()
-    d = layer_thickness(ops, P, p_obj, plan)
-    n1 = lower_normal(ops, P, n0, p_obj, d, plan)
-    inputs = program_inputs(P)
-    res = shade(ops, inputs, n0, n1, d, v, plan)
-    cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-    transmitted = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
+    with ops.stage("Inputs, each kept within its range; the upper normal n0"):
+        P = clamped_inputs(ops)
+        # A zero-length or NaN Normal input (unconnected, or a broken texture) falls back to
+        # the shading normal.
+        n0 = ops.normalize(direction_input(ops, ops.input("Normal")), ops.shading_normal())
+        v = ops.incoming()
+        p_obj = ops.object_position()
+    with ops.stage("Layer thickness d (nm): noise or height"):
+        d = layer_thickness(ops, P, p_obj, plan)
+    with ops.stage("Lower boundary normal n1: parallel, tilted or following d"):
+        n1 = lower_normal(ops, P, n0, p_obj, d, plan)
+    with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
+        inputs = program_inputs(P)
+        res = shade(ops, inputs, n0, n1, d, v, plan)
+    with ops.stage("What reaches the Base Shader: 1 - F(v)"):
+        cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
+        transmitted = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
     res.extras.update(thickness=d, lower_normal=n1, upper_normal=n0, base_weight=transmitted)
     return res
