@@ -39,6 +39,10 @@ ROWS = [(name, preset(name)) for name in ARTIST_PRESETS] + \
 
 @pytest.fixture(scope="module")
 def looks():
+    return measure_rows()
+
+
+def measure_rows() -> dict:
     """Every row on a sphere under the HDRI, no sun; the statistics of each sphere's pixels."""
     S.reset_blender()
     n = len(ROWS)
@@ -108,3 +112,16 @@ def test_a_metal_base_follows_the_base_colour_and_the_upper_roughness():
 def test_phong_to_roughness_is_sharper_for_higher_exponents():
     r = [phong_to_roughness(e) for e in (0.0, 10.0, 100.0, 1000.0)]
     assert r == sorted(r, reverse=True) and r[0] == pytest.approx(1.0) and 0.0 < r[-1] < 0.2
+
+
+if __name__ == "__main__":  # the measured table of docs/looks.md
+    rows = measure_rows()
+    print("| preset | looks like | share in its hues | median saturation | hue sectors | mirror correlation "
+          "| median luminance | holds |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    for name, st in rows.items():
+        look = L.LOOKS[name.removeprefix("replaced ")]
+        share = f"{st.hue_share:.0%}" if look.hues else "-"
+        holds = "yes" if not L.failures(name.removeprefix("replaced "), st) else "no"
+        print(f"| {name} | {look.description} | {share} | {st.saturation:.2f} | {st.sectors} | {st.reflects:.2f} "
+              f"| {st.luminance:.3f} | {holds} |")

@@ -53,10 +53,10 @@ ARTIST_PRESETS: dict[str, dict] = {
                               base_r=0.22, base_g=0.21, base_b=0.2),
     # Bronze with patchy oxide films (high index, 0-120 nm): rough, tarnished, red-gold to blue patches.
     "old_metal": dict(r1_r=2.4, r1_g=2.5, r1_b=2.7, d_min=0.0, d_max=120.0, noise_scale=3.0, noise_detail=3.0,
-                      noise_roughness=0.6, e0=120.0, e1=120.0, ks=0.6, kd=0.0, base_layer="metal",
-                      base_r=0.55, base_g=0.38, base_b=0.2),
-    # Terracotta under a glossy glaze thick enough for a soft pink-blue sheen on the reflections.
-    "glazed_clay": dict(r1_r=1.4, r1_g=1.4, r1_b=1.4, d_min=220.0, d_max=380.0, noise_scale=2.0, e0=1500.0,
+                      noise_roughness=0.6, e0=200.0, e1=200.0, ks=0.5, kd=0.0, base_layer="metal",
+                      base_r=0.45, base_g=0.3, base_b=0.15),
+    # Terracotta under a glossy glaze: a thin glaze warms the body and tints the reflections.
+    "glazed_clay": dict(r1_r=1.4, r1_g=1.4, r1_b=1.4, d_min=60.0, d_max=95.0, noise_scale=2.0, e0=1500.0,
                         e1=1500.0, ks=0.6, kd=0.8, base_r=0.5, base_g=0.2, base_b=0.1),
 }
 
