@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import bpy
 import numpy as np
@@ -16,7 +17,7 @@ import pytest
 
 import layered_brdf_addon
 from layered_brdf_addon.blender import asset_library as AL
-from layered_brdf_addon.blender import assets, properties, user_presets
+from layered_brdf_addon.blender import assets, properties, ui, user_presets
 from layered_brdf_addon.blender import scene as S
 from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.backends import node_group as node_group_builder
@@ -80,6 +81,26 @@ def assert_same_params(got: LayeredParams, want: LayeredParams):
             assert g[key] == pytest.approx(value, rel=1e-5, abs=1e-6), key
         else:
             assert g[key] == value, key
+
+
+class Recorder:
+    """Stands in for a panel's UILayout: records the operators drawn, accepts everything else."""
+
+    def __init__(self, log):
+        self.log = log
+
+    def operator(self, idname, text="", **_):
+        self.log.append((idname, text))
+        return SimpleNamespace()
+
+    def __getattr__(self, name):
+        return lambda *args, **kwargs: Recorder(self.log)
+
+
+def panel_operators(obj):
+    log = []
+    ui.draw_material(Recorder(log), SimpleNamespace(object=obj, scene=bpy.context.scene))
+    return log
 
 
 def listing(path):
@@ -249,9 +270,14 @@ def test_mark_material_as_asset_catalogs_by_preset_and_its_preview_follows_the_m
     monkeypatch.setattr(assets, "PREVIEW_SIZE", 24)
     monkeypatch.setattr(assets, "PREVIEW_SAMPLES", 2)
     obj = add_sphere("Vase", u_segments=8, v_segments=4)
+    assert ("layered_brdf.build_asset_library", "Build Looks Library...") in panel_operators(obj)
     mat = load_preset(obj, "oil_slick")
     assert mat.asset_data is None
+    assert ("layered_brdf.mark_asset", "Mark Material as Asset") in panel_operators(obj)
     assert bpy.ops.layered_brdf.mark_asset() == {"FINISHED"}
+    drawn = panel_operators(obj)
+    assert ("layered_brdf.mark_asset", "Update Asset") in drawn
+    assert "layered_brdf.build_asset_library" in [idname for idname, _ in drawn]
     assert mat.asset_data.catalog_id == assets.CATALOGS["artist"].uuid
     assert tuple(mat.preview.image_size) == (24, 24)
     first = np.array(mat.preview.image_pixels_float[:])
