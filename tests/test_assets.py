@@ -184,11 +184,15 @@ def test_a_look_dropped_on_an_object_carries_its_preset(small_library):
 
 def test_rewriting_replaces_its_own_files_keeps_other_catalogs_and_the_artists_data(tmp_path):
     folder = tmp_path / "looks"
-    mine = bpy.data.materials.new("Glazed clay")  # the artist's own material holding a look's name
+    # The artist's own material holding a look's name, and the node group the look will share.
+    mine = load_preset(add_sphere("Jar", u_segments=8, v_segments=4), "glazed_clay")
+    mine.name = "Glazed clay"
     mine["mine"] = 1
+    group, values = shader_node(mine).node_tree, properties.params_of(mine)
     before = datablocks()
     first = AL.write_asset_library(folder, ["glazed_clay"], preview_size=0)
     assert datablocks() == before and bpy.data.materials["Glazed clay"] is mine and mine["mine"] == 1
+    assert shader_node(mine).node_tree == group and properties.params_of(mine) == values
     assert first.assets == {"Glazed clay": "glazed_clay"}
     cats_path = folder / AL.CATALOG_FILE
     foreign = "0d3b8a3c-2d6e-4f5a-9d4e-9d0b5a1c2e3f:Props/Chairs:Props-Chairs"
@@ -228,6 +232,38 @@ def test_a_blend_the_library_did_not_write_is_refused_and_left_untouched(tmp_pat
         assert e.value.name == "directory" and AL.LIBRARY_FILE in str(e.value)
         assert {p.name: p.read_bytes() for p in folder.iterdir()} == files
         assert datablocks() == before
+
+
+def test_a_failure_leaves_no_partial_files_and_the_session_as_it_was(tmp_path, monkeypatch, small_library):
+    mine = load_preset(add_sphere("Puddle", u_segments=8, v_segments=4), "oil_slick")
+    mine.name = "Oil slick"  # the artist's material holding the look's name, sharing its node group
+    before = datablocks()
+
+    def broken(*_args, **_kwargs):
+        raise RuntimeError("the preview render failed")
+
+    monkeypatch.setattr(assets, "render_previews", broken)
+    with pytest.raises(RuntimeError, match="preview render failed"):
+        AL.write_asset_library(tmp_path / "new", ["oil_slick"], preview_size=16, samples=1)
+    assert not (tmp_path / "new").exists()
+    assert datablocks() == before and bpy.data.materials["Oil slick"] is mine
+    monkeypatch.undo()
+    # Failing after the new .blend was written, over an existing library: the old one stays, whole.
+    folder = tmp_path / "existing"
+    shutil.copytree(small_library.directory, folder)
+    files = {p.name: p.read_bytes() for p in folder.iterdir()}
+    real_sha256 = AL._sha256
+
+    def sha256_fails_on_the_new_file(path):
+        if path.name.startswith(".layered_brdf_partial_"):
+            raise OSError("disk full")
+        return real_sha256(path)
+
+    monkeypatch.setattr(AL, "_sha256", sha256_fails_on_the_new_file)
+    with pytest.raises(OSError, match="disk full"):
+        AL.write_asset_library(folder, ["oil_slick"], preview_size=0)
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == files
+    assert datablocks() == before
 
 
 def test_bad_input_names_the_parameter_and_writes_nothing(tmp_path):

@@ -297,6 +297,9 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
 
         assets.check_preview_options(preview_size, samples)
         hdri_path(hdri)  # a bundled HDRI, else ParameterError naming 'hdri'
+        if bpy.app.is_job_running("RENDER"):
+            raise ParameterError("preview_size", preview_size, "0 while a render is running "
+                                 "(previews are Cycles renders): wait for the render to finish")
     path = _check_directory(directory)
     names = _unique_names(identifiers)
     if path.exists():
