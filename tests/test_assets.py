@@ -142,6 +142,7 @@ def test_every_preset_and_user_preset_is_a_named_look_in_a_written_catalog(tmp_p
         assert data is not None, name
         assert cats[data.catalog_id][0] == catalog_of[assets.kind_of(ident)], name
         assert data.author == assets.AUTHOR and data.description.startswith(name + ":")
+        assert data.license == assets.LICENSE and data.copyright == assets.COPYRIGHT
         assert {t.name for t in data.tags} >= set(assets.BASE_TAGS)
         assert mat.preview is None or tuple(mat.preview.image_size) == (0, 0)  # written without previews
         assert properties.settings(mat).preset == ident

@@ -32,7 +32,8 @@ from . import user_presets
 from .scene import render_to_file
 
 AUTHOR = "Layered BRDF add-on (Granier & Heidrich 2003 model)"
-LICENSE = "Same as the layered-brdf add-on"
+LICENSE = "GPL-3.0-or-later"  # the add-on's licence and maintainer (blender_manifest.toml)
+COPYRIGHT = "layered-brdf developers"
 BASE_TAGS = ("Layered BRDF", "iridescent", "thin film")
 PREVIEW_SIZE = 128  # pixels, the size of Blender's own asset previews
 PREVIEW_SAMPLES = 8
@@ -186,6 +187,7 @@ def mark_look(mat, identifier: str | None = None):
     data.description = describe_look(mat.name, params, kind)
     data.author = AUTHOR
     data.license = LICENSE
+    data.copyright = COPYRIGHT
     data.catalog_id = CATALOGS[kind].uuid
     while len(data.tags):
         data.tags.remove(data.tags[0])
