@@ -302,13 +302,7 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
                                  "(previews are Cycles renders): wait for the render to finish")
     path = _check_directory(directory)
     names = _unique_names(identifiers)
-    if path.exists():
-        old_hashes = _owned_hashes(path)
-        existing_cats = path / CATALOG_FILE
-        cats_before = existing_cats.read_text(encoding="utf-8") if existing_cats.is_file() else None
-        cats = catalog_text(cats_before)
-    else:
-        old_hashes, cats = [], catalog_text(None)
+    _existing(path)  # refused now, before anything is made, when the folder holds files not ours
 
     result = LibraryResult(directory=path, blend=path / LIBRARY_FILE, catalogs=path / CATALOG_FILE, assets=names)
     before_groups = {g.as_pointer() for g in bpy.data.node_groups}
@@ -338,6 +332,9 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
             if not path.exists():
                 path.mkdir()
                 created_dir = True
+            # Read again just before writing: the folder may have changed during the renders
+            # (say the catalogs were edited in Blender's Asset Browser).
+            old_hashes, cats = _existing(path)
             blend_tmp = _temp_path(path, ".blend")
             temps.append(blend_tmp)
             bpy.data.libraries.write(str(blend_tmp), set(made), fake_user=True, compress=True)
@@ -360,11 +357,31 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
     finally:
         for tmp in temps:
             tmp.unlink(missing_ok=True)
-        _remove_made(made, before_groups, before_texts)
-        for mat, name in renamed:
-            mat.name = name
+        try:
+            _remove_made(made, before_groups, before_texts)
+        finally:
+            for mat, name in renamed:
+                mat.name = name
     result.seconds = time.perf_counter() - t0
     return result
+
+
+def _existing(path: Path) -> tuple[list[str], str]:
+    """What the folder holds now: the hashes of a library .blend that may be replaced and the
+    catalog file to write (its other catalogs kept).  ParameterError naming ``directory`` when the
+    .blend there is not the library's or the catalog file is not one of VERSION 1."""
+    if not path.exists():
+        return [], catalog_text(None)
+    old_hashes = _owned_hashes(path)
+    cats = path / CATALOG_FILE
+    if not cats.is_file():
+        return old_hashes, catalog_text(None)
+    try:
+        text = cats.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise ParameterError("directory", str(path), f"a folder whose {CATALOG_FILE} is readable UTF-8 text "
+                             f"({e})") from None
+    return old_hashes, catalog_text(text)
 
 
 def _remove_made(made, before_groups: set, before_texts: set) -> None:
