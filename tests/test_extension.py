@@ -139,7 +139,9 @@ def _child(zip_path: str, out: str) -> None:
     r["material_preset"] = mat.layered_brdf_settings.preset
     r["build"] = mat["layered_brdf_build"]
     group = mat.node_tree.nodes["Layered BRDF"].node_tree
-    r["asset"] = group.asset_data is not None and group.preview is not None
+    # A look is a material asset with its preview; the node group is never an asset.
+    bpy.ops.layered_brdf.mark_asset()
+    r["asset"] = mat.asset_data is not None and mat.preview is not None and group.asset_data is None
     bpy.ops.layered_brdf.save_preset(name="Extension test")
     presets_dir = bpy.utils.extension_path_user(PACKAGE, path="presets")
     r["preset_file"] = os.path.join(presets_dir, "Extension test.json")

@@ -396,8 +396,9 @@ def test_keyframed_thickness_renders_each_frame_like_the_closure_form():
     frames = {1: 120.0, 2: 260.0}
     for frame, d in frames.items():
         for name in ("d_min", "d_max"):
-            node.inputs[name].default_value = d
-            node.inputs[name].keyframe_insert("default_value", frame=frame)
+            sock = M.param_socket(node, name)[0]
+            sock.default_value = d
+            sock.keyframe_insert("default_value", frame=frame)
     scene = bpy.context.scene
     scene.frame_set(1)
     bpy.context.view_layer.update()

@@ -287,7 +287,7 @@ def layered_material_of(obj):
 def apply_to_object(obj, params: LayeredParams | None = None, backend: str | None = None, preview: bool = True):
     """Give ``obj`` the layered material (reusing its own), with ``params`` or the current values.
 
-    The node group is marked as an asset; with ``preview`` its preview is rendered when missing.
+    A material that is a look (an asset) gets a fresh preview; with ``preview`` now, else when idle.
     """
     mat = layered_material_of(obj)
     if mat is not None:
