@@ -8,7 +8,7 @@ r1_g, the base colour, metallic for metal and titanium presets, roughness from e
 Each tile's label gives its render time.
 
 Writes docs/images/presets-vs-principled-thin-film.png (and a .json next to it with the
-values and timings), the two together or neither.  ``make looks-sheet``; about four
+values and timings), the two together or neither.  ``make looks-sheet``; about two
 minutes on two cores at the defaults.
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ sys.path.insert(0, str(ROOT))
 
 OUT = ROOT / "docs" / "images" / "presets-vs-principled-thin-film.png"
 SIZE = 192
-SAMPLES = 32
+SAMPLES = 64
 PAIRS_PER_ROW = 3
 
 

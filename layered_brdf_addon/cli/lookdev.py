@@ -32,8 +32,8 @@ from .staging import StagedOutputs, TargetError, check_targets, output_stem
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"
 DEFAULT_PRESETS = tuple(ARTIST_PRESETS) + tuple(PAPER_PRESETS)
 # Sized for about a minute on two cores (measured: docs/looks.md).
-DEFAULT_SIZE = 160
-DEFAULT_SAMPLES = 24
+DEFAULT_SIZE = 192
+DEFAULT_SAMPLES = 32
 SIZE_RANGE = (16, 2048)
 SAMPLES_RANGE = (1, 4096)
 BACKEND = "nodes"
