@@ -24,7 +24,7 @@ from layered_brdf_addon.cli.requests import request_from_options
 from layered_brdf_addon.cli.sidecar import read_sidecar
 from layered_brdf_addon.cli.staging import OutputPaths, StagedOutputs, stale_temps, temp_path
 from layered_brdf_addon.model.params import PARAM_SPECS, LayeredParams, ParameterError
-from layered_brdf_addon.model.presets import PAPER_PRESETS, PRESETS, preset
+from layered_brdf_addon.model.presets import PAPER_PRESETS, PRESETS, preset, preset_label
 
 from constants import MAX_FAILING, REL_TOL
 from process_helpers import interrupt_once_started, start_cli, stop
@@ -470,7 +470,7 @@ def test_lookdev_sheet_has_a_labelled_tile_per_preset(tmp_path):
     img = np.asarray(Image.open(old).convert("RGB"))
     assert (img.shape[1], img.shape[0]) == tuple(meta["layout"]["sheet_size"])
     for t in meta["tiles"]:
-        assert t["label"][0] == {"oil_slick": "Oil slick", "fig4_tilted": "Fig. 4 tilted boundary"}[t["name"]]
+        assert t["label"][0] == preset_label(t["name"])
         assert t["params"] == preset(t["name"]).to_dict()
         x0, y0, x1, y1 = t["box"]
         assert (x1 - x0, y1 - y0) == (24, 24) and img[y0:y1, x0:x1].std() > 5  # ball on a background
