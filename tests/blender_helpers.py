@@ -2,6 +2,31 @@
 from __future__ import annotations
 
 import bpy
+import pytest
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    """The add-on registered for the module that imports this fixture, from an empty file."""
+    import layered_brdf_addon
+    from layered_brdf_addon.blender.scene import reset_blender
+
+    reset_blender()
+    layered_brdf_addon.register()
+    yield
+    layered_brdf_addon.unregister()
+    reset_blender()
+
+
+@pytest.fixture
+def user_dir(tmp_path, monkeypatch):
+    """User presets in a temporary folder."""
+    from layered_brdf_addon.blender import user_presets
+
+    path = tmp_path / "presets"
+    path.mkdir()
+    monkeypatch.setattr(user_presets, "presets_dir", lambda: path)
+    return path
 
 
 def add_sphere(name: str = "Small", u_segments: int = 16, v_segments: int = 8):

@@ -24,7 +24,7 @@ from layered_brdf_addon.backends import node_group as node_group_builder
 from layered_brdf_addon.model.params import LayeredParams, ParameterError
 from layered_brdf_addon.model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
 
-from blender_helpers import add_sphere, load_preset
+from blender_helpers import addon, user_dir, add_sphere, load_preset
 
 ROOT = Path(__file__).resolve().parents[1]
 STAMP = node_group_builder.STAMP_KEY
@@ -32,23 +32,6 @@ SMALL = ["anodised_titanium", "fig4_tilted"]
 SESSION_IMAGES = {"Render Result", "Viewer Node"}
 COLLECTIONS = ("materials", "node_groups", "scenes", "objects", "meshes", "cameras", "lights", "worlds", "images",
                "texts")
-
-
-@pytest.fixture(scope="module", autouse=True)
-def addon():
-    S.reset_blender()
-    layered_brdf_addon.register()
-    yield
-    layered_brdf_addon.unregister()
-    S.reset_blender()
-
-
-@pytest.fixture
-def user_dir(tmp_path, monkeypatch):
-    path = tmp_path / "presets"
-    path.mkdir()
-    monkeypatch.setattr(user_presets, "presets_dir", lambda: path)
-    return path
 
 
 @pytest.fixture(scope="module")

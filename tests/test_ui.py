@@ -31,27 +31,10 @@ from layered_brdf_addon.model.base_layers import base_node
 from layered_brdf_addon.model.presets import PRESETS
 from layered_brdf_addon.backends import node_group as node_group_builder
 
-from blender_helpers import activate, add_sphere, load_preset
+from blender_helpers import addon, user_dir, activate, add_sphere, load_preset
 from constants import MAX_FAILING_COARSE as MAX_FAILING, REL_TOL_COARSE as REL_TOL, SUN_40 as SUN
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-@pytest.fixture(scope="module", autouse=True)
-def addon():
-    S.reset_blender()
-    layered_brdf_addon.register()
-    yield
-    layered_brdf_addon.unregister()
-    S.reset_blender()
-
-
-@pytest.fixture
-def user_dir(tmp_path, monkeypatch):
-    path = tmp_path / "presets"
-    path.mkdir()
-    monkeypatch.setattr(user_presets, "presets_dir", lambda: path)
-    return path
 
 
 def spheres(n=1, height=64, osl=False):

@@ -15,14 +15,14 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import bpy  # first: it makes mathutils importable
 import numpy as np
 from mathutils import Euler, Vector
 
 from ..model.params import LayeredParams, ParameterError
-from .scene import ensure_passes
+from .scene import ensure_passes, mesh_from_arrays
 
 HDRI_PREFERENCE = ("forest.exr", "courtyard.exr", "studio.exr")
 HDRI_STRENGTH = 1.0
@@ -153,22 +153,6 @@ def _cylinder_arrays(radius: float, z0: float, z1: float, segments: int = 96):
     return verts, [side, lo[::-1][None, :], hi[None, :]]
 
 
-def _mesh_from_arrays(name: str, verts: np.ndarray, face_sets: Sequence[np.ndarray]):
-    loops = np.concatenate([f.ravel() for f in face_sets])
-    sizes = np.concatenate([np.full(len(f), f.shape[1]) for f in face_sets])
-    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    mesh = bpy.data.meshes.new(name)
-    mesh.vertices.add(len(verts))
-    mesh.vertices.foreach_set("co", np.asarray(verts, dtype=np.float32).ravel())
-    mesh.loops.add(len(loops))
-    mesh.loops.foreach_set("vertex_index", loops.astype(np.int32))
-    mesh.polygons.add(len(sizes))
-    mesh.polygons.foreach_set("loop_start", starts.astype(np.int32))
-    mesh.update(calc_edges=True)
-    mesh.validate()
-    return mesh
-
-
 # ---------------------------------------------------------------------------
 def _track(scene, collection: str, datablock):
     _CREATED.setdefault(scene.as_pointer(), []).append((collection, datablock))
@@ -217,7 +201,7 @@ def build_lookdev_scene(size: int = 256, samples: int = 16, engine: str = "CYCLE
 
 def _populate(scene, size: int, samples: int, engine: str, env_path: Path):
     verts, faces = _ball_arrays()
-    ball_mesh = _track(scene, "meshes", _mesh_from_arrays("LookDevBall", verts, faces))
+    ball_mesh = _track(scene, "meshes", mesh_from_arrays("LookDevBall", verts, faces))
     ball_mesh.shade_smooth()
     ball = _track(scene, "objects", bpy.data.objects.new("LookDevBall", ball_mesh))
     ball.rotation_euler = Euler(tuple(math.radians(a) for a in BALL_TILT_DEG))
@@ -227,7 +211,7 @@ def _populate(scene, size: int, samples: int, engine: str, env_path: Path):
     ball_bottom = -float(np.max(ball_profile(np.array([np.pi]))))
     z1 = ball_bottom + 0.08  # the ball sits a little into the pedestal
     pv, pf = _cylinder_arrays(PEDESTAL_RADIUS, z1 - PEDESTAL_HEIGHT, z1)
-    ped_mesh = _track(scene, "meshes", _mesh_from_arrays("LookDevPedestal", pv, pf))
+    ped_mesh = _track(scene, "meshes", mesh_from_arrays("LookDevPedestal", pv, pf))
     ped_mat = _track(scene, "materials", bpy.data.materials.new("LookDevPedestal"))
     _principled_tree(ped_mat, PEDESTAL_COLOR, metallic=0.0, roughness=0.5)
     ped_mesh.materials.append(ped_mat)

@@ -11,6 +11,7 @@ import os
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Sequence
 
 import bpy  # first: it makes bmesh and mathutils importable
 import bmesh
@@ -75,21 +76,27 @@ def sphere_arrays(segments: int = SPHERE_SEGMENTS, rings: int = SPHERE_RINGS):
     return verts, cap_top, quads, cap_bottom
 
 
-def _sphere_mesh(name: str):
-    """A smooth-shaded UV sphere built from arrays (bmesh's operator is much slower)."""
-    verts, tri_top, quads, tri_bottom = sphere_arrays()
-    loops = np.concatenate([tri_top.ravel(), quads.ravel(), tri_bottom.ravel()])
-    sizes = np.concatenate([np.full(len(tri_top), 3), np.full(len(quads), 4), np.full(len(tri_bottom), 3)])
+def mesh_from_arrays(name: str, verts: np.ndarray, face_sets: Sequence[np.ndarray]):
+    """A new mesh of vertices ``verts`` (N, 3) and faces, each array of ``face_sets`` holding
+    faces of one size (F, k) as vertex indices."""
+    loops = np.concatenate([np.asarray(f).ravel() for f in face_sets])
+    sizes = np.concatenate([np.full(len(f), np.asarray(f).shape[1]) for f in face_sets])
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     mesh = bpy.data.meshes.new(name)
     mesh.vertices.add(len(verts))
-    mesh.vertices.foreach_set("co", verts.astype(np.float32).ravel())
+    mesh.vertices.foreach_set("co", np.asarray(verts, dtype=np.float32).ravel())
     mesh.loops.add(len(loops))
     mesh.loops.foreach_set("vertex_index", loops.astype(np.int32))
     mesh.polygons.add(len(sizes))
     mesh.polygons.foreach_set("loop_start", starts.astype(np.int32))
     mesh.update(calc_edges=True)
     mesh.validate()
+    return mesh
+
+
+def _sphere_mesh(name: str):
+    verts, tri_top, quads, tri_bottom = sphere_arrays()
+    mesh = mesh_from_arrays(name, verts, (tri_top, quads, tri_bottom))
     mesh.shade_smooth()
     return mesh
 
