@@ -18,21 +18,10 @@ from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.backends import node_group as node_group_builder
 from layered_brdf_addon.model import preset
 
-from blender_helpers import activate, add_sphere, load_preset
+from blender_helpers import activate, add_sphere, addon, load_preset
 
 ROOT = Path(__file__).resolve().parents[1]
 STAMP = node_group_builder.STAMP_KEY
-
-
-@pytest.fixture(scope="module", autouse=True)
-def addon():
-    from layered_brdf_addon.blender.scene import reset_blender
-
-    reset_blender()
-    layered_brdf_addon.register()
-    yield
-    layered_brdf_addon.unregister()
-    reset_blender()
 
 
 def plain_object(name="Small"):
