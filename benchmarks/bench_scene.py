@@ -192,6 +192,8 @@ def build_scene():
     from mathutils import Vector
     from math import radians
 
+    from layered_brdf_addon.blender.scene import deterministic_cycles
+
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     bpy.ops.mesh.primitive_monkey_add(size=2.0)
@@ -222,18 +224,7 @@ def build_scene():
     nt.links.new(env.outputs["Color"], bg.inputs["Color"])
     scene.world = world
 
-    r = scene.render
-    r.resolution_x = r.resolution_y = SIZE
-    r.resolution_percentage = 100
-    r.threads_mode = "FIXED"
-    r.threads = 1
-    r.use_persistent_data = False
-    c = scene.cycles
-    c.device = "CPU"
-    c.seed = SEED
-    c.use_animated_seed = False
-    c.use_denoising = False
-    c.use_adaptive_sampling = False
+    deterministic_cycles(scene, (SIZE, SIZE), None, 1, SEED)  # samples: set per render
     return obj
 
 

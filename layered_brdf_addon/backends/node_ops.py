@@ -56,8 +56,8 @@ class NodeOps:
         self._rows: dict[int, int] = {}
         self._memo: dict = {}
         self.count = 0
-        self._frame = None  # the frame of the program's stage being built
-        self._stages: list = []  # (frame, {depth: rows}) in build order
+        self._stage = None  # the stage being built: (its frame, its rows per depth)
+        self._stages: list = []  # every stage, in build order
 
     # node plumbing ---------------------------------------------------------
     @staticmethod
@@ -93,11 +93,11 @@ class NodeOps:
         d = dmax + 1 if depth is None else depth
         row = self._rows.get(d, 0)
         self._rows[d] = row + 1
-        if self._frame is not None:  # rows counted within the stage; stack_stages() moves the bands
-            rows = self._stages[-1][1]
+        if self._stage is not None:  # rows counted within the stage; stack_stages() moves the bands
+            frame, rows = self._stage
             row = rows.get(d, 0)
             rows[d] = row + 1
-            n.parent = self._frame
+            n.parent = frame
         _place(n, (self.x0 + d * self.COLUMN, self.y0 - row * self.ROW))
         n.hide = True
         self.count += 1
@@ -111,13 +111,13 @@ class NodeOps:
         frame = self.tree.nodes.new("NodeFrame")
         frame.label = title
         frame.label_size = 28
-        outer = self._frame
-        self._frame = frame
-        self._stages.append((frame, {}))
+        outer = self._stage
+        self._stage = (frame, {})
+        self._stages.append(self._stage)
         try:
             yield frame
         finally:
-            self._frame = outer
+            self._stage = outer
 
     def stack_stages(self, gap: float = 120.0) -> None:
         """Move each stage's band of nodes below the previous one, so that the frames don't overlap."""

@@ -22,7 +22,7 @@ import numpy as np
 from mathutils import Euler, Vector
 
 from ..model.params import LayeredParams, ParameterError
-from .scene import ensure_passes, mesh_from_arrays
+from .scene import deterministic_cycles, ensure_passes, mesh_from_arrays
 
 HDRI_PREFERENCE = ("forest.exr", "courtyard.exr", "studio.exr")
 HDRI_STRENGTH = 1.0
@@ -249,22 +249,10 @@ def _populate(scene, size: int, samples: int, engine: str, env_path: Path):
         nt.links.new(bg.outputs[0], out.inputs["Surface"])
     scene.world = world
 
-    r = scene.render
-    r.engine = engine
-    r.resolution_x = r.resolution_y = size
-    r.resolution_percentage = 100
-    r.threads_mode = "FIXED"
-    r.threads = THREADS
-    r.use_persistent_data = False
-    r.film_transparent = False
-    c = scene.cycles
-    c.device = "CPU"
-    c.samples = samples
-    c.seed = SEED
-    c.use_animated_seed = False
-    c.use_denoising = False
-    c.use_adaptive_sampling = False
-    c.shading_system = False
+    scene.render.engine = engine
+    deterministic_cycles(scene, (size, size), samples, THREADS, SEED)
+    scene.render.film_transparent = False
+    scene.cycles.shading_system = False
     scene.eevee.taa_render_samples = samples
     ensure_passes(scene)  # normal and the material's AOVs, as in the reference scene
     return ball

@@ -369,7 +369,7 @@ def _link_legacy_base(tree, node, channels, tint) -> None:
         else:
             tree.links.new(value, combine.inputs[k])
     result = combine.outputs[0]
-    if not isinstance(tint, tuple) or any(abs(c - 1.0) > 0.0 for c in tint[:3]):
+    if not isinstance(tint, tuple) or tint[:3] != (1.0, 1.0, 1.0):
         mix = tree.nodes.new("ShaderNodeMix")
         mix.data_type = "RGBA"
         mix.blend_type = "MULTIPLY"

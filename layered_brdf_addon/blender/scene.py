@@ -101,6 +101,26 @@ def _sphere_mesh(name: str):
     return mesh
 
 
+def deterministic_cycles(scene, resolution: tuple[int, int], samples: int | None, threads: int, seed: int) -> None:
+    """Cycles on the CPU rendering the same pixels every time: ``resolution`` at 100%, a fixed
+    number of ``threads``, a fixed ``seed``, no denoiser, no adaptive sampling, no data kept
+    between renders; ``samples`` per pixel (None: left as it is)."""
+    r = scene.render
+    r.resolution_x, r.resolution_y = resolution
+    r.resolution_percentage = 100
+    r.threads_mode = "FIXED"
+    r.threads = threads
+    r.use_persistent_data = False
+    c = scene.cycles
+    c.device = "CPU"
+    if samples is not None:
+        c.samples = samples
+    c.seed = seed
+    c.use_animated_seed = False
+    c.use_denoising = False
+    c.use_adaptive_sampling = False
+
+
 def build_scene(spec: SceneSpec, scene=None):
     """Create the reference scene in ``scene`` (default: the current one). Returns the spheres."""
     scene = scene or bpy.context.scene
@@ -145,22 +165,11 @@ def build_scene(spec: SceneSpec, scene=None):
     bg.inputs["Strength"].default_value = 0.0
     scene.world = world
 
-    r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x, r.resolution_y = spec.camera.width, spec.camera.height
-    r.resolution_percentage = 100
-    r.threads_mode = "FIXED"
-    r.threads = spec.threads
-    r.use_persistent_data = False
-    r.film_transparent = False
+    scene.render.engine = "CYCLES"
+    deterministic_cycles(scene, (spec.camera.width, spec.camera.height), spec.samples, spec.threads, spec.seed)
+    scene.render.film_transparent = False
     c = scene.cycles
-    c.device = "CPU"
     c.shading_system = spec.osl
-    c.samples = spec.samples
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.seed = spec.seed
-    c.use_animated_seed = False
     c.filter_width = 0.01
     c.max_bounces = 0
     c.sample_clamp_direct = 0.0
