@@ -30,6 +30,9 @@ OFF = {
     "dispersion": (BASE.replace(r1_r=1.45, r1_g=1.45, r1_b=1.45), lambda plan: plan.dispersion),
     "interference": (BASE.replace(accuracy="spectral16", d_min=THICK, d_max=THICK),
                      lambda plan: plan.interference),
+    # A soap-like film over a dielectric: the second harmonic is below MULTIBEAM_CONTRAST.
+    "multibeam": (BASE.replace(optics="physical", r1_r=1.33, r1_g=1.33, r1_b=1.33, r2_r=1.0, r2_g=1.0, r2_b=1.0),
+                  lambda plan: plan.multibeam),
 }
 DECIDING = [(effect, name) for effect, names in DECIDING_PARAMETERS.items() for name in names]
 
@@ -144,3 +147,14 @@ def test_thick_layer_keyframed_thin_keeps_interference_on_both_frames():
         means.append(beauty[mask].mean(axis=0))
     hue = [m / m.sum() for m in means]
     assert np.abs(hue[0] - hue[1]).max() > 0.02, hue  # the thin frame has interference colours
+
+
+def test_second_harmonic_only_where_the_layer_bounces_light_back():
+    """TiO2 on titanium keeps the light bouncing inside the layer (|r01 r12| about 0.24): the
+    plan adds the second harmonic; the paper's optics never do."""
+    from layered_brdf_addon.model.media import layer_index_values, lower_medium_values
+
+    film = BASE.replace(optics="physical", **layer_index_values("tio2_amorphous"), **lower_medium_values("titanium"))
+    assert plan_effects(film).multibeam and plan_effects(film).key.endswith("T2")
+    assert not plan_effects(film.replace(optics="paper")).multibeam
+    assert not plan_effects(film.replace(r2_r=2.4, r2_g=2.47, r2_b=2.55, k2_r=0.0, k2_g=0.0, k2_b=0.0)).multibeam

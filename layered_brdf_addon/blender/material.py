@@ -619,8 +619,7 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     set_inputs(node, params)
     _set_base_inputs(node, params)
     mat["layered_brdf_backend"] = backend
-    mat["layered_brdf_enums"] = {"thickness_mode": params.thickness_mode, "normal_mode": params.normal_mode,
-                                 "lobe": params.lobe, "base_layer": params.base_layer, "accuracy": params.accuracy}
+    mat["layered_brdf_enums"] = {s.name: getattr(params, s.name) for s in LayeredParams.specs() if s.kind == "enum"}
     return mat
 
 

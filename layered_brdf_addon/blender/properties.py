@@ -84,6 +84,9 @@ def _updater(name: str):
             return
         adopt(mat, keep=name)
         try:
+            if name == "lower_medium" and self.lower_medium != "custom" and M.shader_node(mat) is not None:
+                # A named medium fills the lower medium's n and k sockets.
+                M.set_inputs(M.shader_node(mat), params_of(mat).replace(lower_medium=self.lower_medium))
             sync_material(mat)
         except ParameterError:
             return  # the material is left as it was; the panel shows the reason (material_problem)

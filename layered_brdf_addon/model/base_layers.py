@@ -6,6 +6,11 @@ offers a clear film ('transparent': a soap bubble) and a metal ('metal': anodise
 tarnished metals), a conductor of the base colour receiving what the top boundary
 transmits (``1 - F``), as rough as the upper boundary.
 
+With thin-film optics (``optics="physical"``) the metal *is* the layer's lower boundary: its
+reflection is the transmitted lobe, from the lower medium's complex index (``r2``, ``k2``), so
+no second metal is added; a transparent base receives what the film neither reflects nor
+absorbs (docs/physical-optics.md has the rule for each base).
+
 bpy-free: the Blender layer builds the node from :func:`base_node`.
 """
 from __future__ import annotations
@@ -37,6 +42,8 @@ def base_node(params: LayeredParams) -> BaseNode | None:
     """The node the add-on puts in the Base Shader input for ``params.base_layer`` (None: none)."""
     if params.base_layer == "transparent":
         return BaseNode("ShaderNodeBsdfTransparent", "base")
+    if params.base_layer == "metal" and params.optics == "physical":
+        return None  # the lower medium is the metal
     if params.base_layer == "metal":
         return BaseNode("ShaderNodeBsdfMetallic", "metal base",
                         {"Base Color": (*params.base_color, 1.0), "Roughness": phong_to_roughness(params.e0)})

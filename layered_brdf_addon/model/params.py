@@ -15,6 +15,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Iterator, Mapping
 
+from .media import MEDIA, media_names
+
 # Representative wavelengths of the R, G and B channels, in nanometres (SPEC).
 WAVELENGTHS_NM = (645.0, 525.0, 445.0)
 
@@ -100,6 +102,9 @@ THICKNESS_MODES = ("noise", "height")
 NORMAL_MODES = ("parallel", "tilted", "correlated")
 LOBES = ("beckmann", "phong")
 BASE_LAYERS = ("none", "transparent", "metal")
+OPTICS_MODES = ("paper", "physical")
+# "custom", then the named media of the measured table (model/data/media.json).
+LOWER_MEDIA = ("custom",) + media_names()
 ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
 
 # The node group's colour socket of the base colour (base_r, base_g, base_b), and its tooltip.
@@ -114,10 +119,14 @@ OPTION_LABELS = {
     "beckmann": "Beckmann", "phong": "Phong (OSL only)",
     "none": "None (your Base Shader)", "transparent": "Transparent (soap film)",
     "metal": "Metal (base colour)",
+    "paper": "Paper (lower boundary a mirror)", "physical": "Physical (thin-film optics)",
     "rgb": "RGB (the paper's 3 wavelengths)", "analytic": "Analytic spectral",
     "spectral4": "Spectral, 4 wavelengths", "spectral8": "Spectral, 8 wavelengths",
     "spectral16": "Spectral, 16 wavelengths", "spectral32": "Spectral, 32 wavelengths",
 }
+
+
+OPTION_LABELS.update({"custom": "Custom (n and k below)", **{name: m.label for name, m in MEDIA.items()}})
 
 
 def option_label(option: str) -> str:
@@ -171,6 +180,34 @@ class LayeredParams:
                               "How far the lower normal bends per unit of thickness gradient (object units)",
                               unit="1/nm", range=(0.0, 1.0e3), soft=(0.0, 0.01), group="Lower boundary",
                               socket_label="Bump Strength (per nm)")
+    # --- what lies under the layer (physical optics) ---------------------
+    optics: str = _p("paper", "Optics",
+                     "How the layer's boundaries reflect: 'paper' (Granier & Heidrich: the lower boundary a perfect "
+                     "mirror, no reflection phase) or 'physical' (thin-film optics: exact Fresnel reflectance at both "
+                     "boundaries, the lower medium's complex index, the phase of each reflection, and only what the "
+                     "layer neither reflects nor absorbs reaching the base)", options=OPTICS_MODES)
+    lower_medium: str = _p("custom", "Lower medium",
+                           "Named medium under the layer whose measured index fills the lower medium's n and k "
+                           "(model/data/media.json); 'custom' keeps the values given", options=LOWER_MEDIA,
+                           group="Lower boundary")
+    r2_r: float = _p(1.5, "Lower index R", "Refractive index n of the medium under the layer at 645 nm (red); "
+                     "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
+                     socket_label="Lower IOR (Red)")
+    r2_g: float = _p(1.5, "Lower index G", "Refractive index n of the medium under the layer at 525 nm (green); "
+                     "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
+                     socket_label="Lower IOR (Green)")
+    r2_b: float = _p(1.5, "Lower index B", "Refractive index n of the medium under the layer at 445 nm (blue); "
+                     "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
+                     socket_label="Lower IOR (Blue)")
+    k2_r: float = _p(0.0, "Lower extinction R", "Extinction coefficient k of the medium under the layer at 645 nm "
+                     "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Red)")
+    k2_g: float = _p(0.0, "Lower extinction G", "Extinction coefficient k of the medium under the layer at 525 nm "
+                     "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Green)")
+    k2_b: float = _p(0.0, "Lower extinction B", "Extinction coefficient k of the medium under the layer at 445 nm "
+                     "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Blue)")
     # --- specular and diffuse --------------------------------------------
     e0: float = _p(90.0, "Upper exponent", "Phong exponent of the upper boundary (higher is sharper)",
                    range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular", socket_label="Upper Exponent")
@@ -226,6 +263,14 @@ class LayeredParams:
         return (self.r1_r, self.r1_g, self.r1_b)
 
     @property
+    def r2(self) -> tuple[float, float, float]:
+        return (self.r2_r, self.r2_g, self.r2_b)
+
+    @property
+    def k2(self) -> tuple[float, float, float]:
+        return (self.k2_r, self.k2_g, self.k2_b)
+
+    @property
     def base_color(self) -> tuple[float, float, float]:
         return (self.base_r, self.base_g, self.base_b)
 
@@ -241,6 +286,11 @@ class LayeredParams:
             raise ParameterError(name, data[name], "a known parameter name: " + ", ".join(_SPEC_BY_NAME))
         values = dataclasses.asdict(base) if base is not None else {}
         values.update(data)
+        medium = data.get("lower_medium")
+        if medium in LOWER_MEDIA and medium != "custom":
+            # A named medium fills the lower medium's n and k, unless they are given too.
+            from .media import lower_medium_values
+            values.update({k: v for k, v in lower_medium_values(medium).items() if k not in data})
         return cls(**values).validate()
 
     def replace(self, **changes: Any) -> "LayeredParams":

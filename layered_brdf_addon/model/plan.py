@@ -21,6 +21,8 @@ class EffectPlan:
     interference: bool = True  # False: a spectral or analytic layer so thick that interference averages out
     analytic: bool = False  # RGB channels with the interference integrated over each channel's band
     footprint: bool = True  # analytic: also over the pixel's footprint, where the backend has derivatives (OSL)
+    optics: str = "paper"  # "paper": the lower boundary a perfect mirror; "physical": thin-film optics
+    multibeam: bool = False  # physical: the second harmonic of the beams that bounce inside the layer
 
     @classmethod
     def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
@@ -40,6 +42,8 @@ class EffectPlan:
             parts.append("A" if self.footprint else "Af")
         if not self.interference:
             parts.append("i")
+        if self.optics == "physical":
+            parts.append("T2" if self.multibeam else "T")
         return "".join(parts)
 
     def to_dict(self) -> dict:
@@ -60,6 +64,9 @@ class EffectPlan:
                        + (", and over the pixel's footprint in OSL" if self.footprint else ""))
         if not self.interference:
             out.append("no interference: the layer is thick enough for it to average out over the band")
+        if self.optics == "physical":
+            out.append("thin-film optics: exact Fresnel at both boundaries, reflection phases"
+                       + (", and the beams that bounce inside the layer (second harmonic)" if self.multibeam else ""))
         if self.specular:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")

@@ -26,6 +26,11 @@ LOBES_BY_BACKEND = {"nodes": ("beckmann",), "osl": ("beckmann", "phong")}
 # spectral.interference_cutoff_optical_nm, which a test compares with this value).
 INTERFERENCE_CUTOFF_OPTICAL_NM = 4146.0
 
+# Physical optics: the second harmonic (light bouncing twice inside the layer) is simulated where
+# its amplitude relative to the first, |r01 r12| at normal incidence, exceeds this (a film of high
+# index on a metal: TiO2 on titanium is 0.24; soap 0.02, oil on water 0.01; docs/physical-optics.md).
+MULTIBEAM_CONTRAST = 0.1
+
 #: The parameters whose value decides an effect, by the effect they decide.
 DECIDING_PARAMETERS = {
     "specular": ("ks",),
@@ -35,6 +40,7 @@ DECIDING_PARAMETERS = {
     "bump": ("bump_strength",),
     "dispersion": ("r1_r", "r1_g", "r1_b"),
     "interference": ("d_min", "r1_r", "r1_g", "r1_b", "r0"),
+    "multibeam": ("r1_r", "r1_g", "r1_b", "r0", "r2_r", "r2_g", "r2_b", "k2_r", "k2_g", "k2_b"),
 }
 
 
@@ -76,9 +82,23 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
     analytic = p.accuracy == "analytic"
     banded = bool(spectral) or analytic  # colour integrated over the band, where interference can average out
     interference = not (banded and not moving("interference") and interference_averages_out(p))
+    physical = p.optics == "physical"
+    multibeam = physical and interference and (moving("multibeam") or beam_contrast(p) > MULTIBEAM_CONTRAST)
     return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
                       thickness=thickness, normals=normals, dispersion=dispersion, lobe=p.lobe,
-                      spectral=spectral, interference=interference, analytic=analytic)
+                      spectral=spectral, interference=interference, analytic=analytic, optics=p.optics,
+                      multibeam=multibeam)
+
+
+def beam_contrast(p: LayeredParams) -> float:
+    """The largest ``|r01 r12|`` over the channels at normal incidence: how much of the light
+    that crossed the layer bounces inside it again, the ratio of each harmonic to the last."""
+    out = 0.0
+    for r1, n2, k2 in zip(p.r1, p.r2, p.k2):
+        r01 = abs((p.r0 - r1) / (p.r0 + r1))
+        r12 = abs(complex(r1 - n2, -k2) / complex(r1 + n2, k2))
+        out = max(out, r01 * r12)
+    return out
 
 
 def spectral_count(accuracy: str) -> int:

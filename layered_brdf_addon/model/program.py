@@ -263,6 +263,182 @@ def fold_interference(ops, AR, AT, AI, basis):
 FOLD_BASIS = ("uR", "uT", "uI", "rRT", "rRI", "rTI", "det")
 
 
+# ---------------------------------------------------------------- thin-film optics
+# The physical mode (``optics="physical"``): the paper's lower boundary is a perfect mirror
+# with no phase change.  Thin-film optics (Born & Wolf; docs/physical-optics.md) gives each
+# boundary its Fresnel amplitudes, for the s and p polarisations, the lower one complex where
+# the medium under the layer absorbs (a metal, index n2 + i k2).  Summing the beams that leave
+# the layer after 0, 1, 2... reflections on the lower boundary (Airy) gives the reflectance as
+# a constant plus cosines of multiples of the phase 2 delta:
+#
+#     R(delta) = DC + 2 |Z1| cos(2 delta + arg Z1) + 2 |Z2| cos(4 delta + arg Z2) + ...
+#
+# per polarisation, with a = r01 (real: the layer and the outside are clear), b = t01 t10 r12
+# = (1 - a^2) r12, c = r10 r12 = -a r12 and q = 1 / (1 - |c|^2):
+#
+#     DC = a^2 + |b|^2 q,   Z1 = a b + |b|^2 q c,   Z2 = a b c + |b|^2 q c^2.
+#
+# DC - a^2 is the transmitted lobe's share; Z1 and Z2 are its interference with the top
+# reflection, each integrated over a colour band in closed form like the paper's cosine.
+# Complex values are pairs (re, im) of channel values.
+def c_mul(a, b):
+    return a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0]
+
+
+def c_div(ops, a, b):
+    inv = 1.0 / ops.maximum(b[0] * b[0] + b[1] * b[1], 1e-30)
+    return (a[0] * b[0] + a[1] * b[1]) * inv, (a[1] * b[0] - a[0] * b[1]) * inv
+
+
+def c_abs2(a):
+    return a[0] * a[0] + a[1] * a[1]
+
+
+@shader_function
+def c_sqrt(ops, re, im):
+    """Principal square root of ``re + i im`` for ``im >= 0`` (the root with a non-negative
+    imaginary part: the wave that decays into an absorbing medium)."""
+    m = ops.sqrt(re * re + im * im)
+    return ops.sqrt(ops.maximum((m + re) * 0.5, 0.0)), ops.sqrt(ops.maximum((m - re) * 0.5, 0.0))
+
+
+@shader_function
+def top_amplitudes(ops, cos0, eta, cos1):
+    """Fresnel amplitudes ``(r_s, r_p)`` of the upper boundary, outside to layer, for a
+    direction at cosine ``cos0`` outside and ``cos1`` inside (``eta = r0 / r1``); real: both
+    media are clear.  Divided through by ``r1`` so that only the ratio appears."""
+    a = eta * cos0
+    b = eta * cos1
+    rs = (a - cos1) / ops.maximum(a + cos1, 1e-9)
+    rp = (cos0 - b) / ops.maximum(cos0 + b, 1e-9)
+    return rs, rp
+
+
+@shader_function
+def lower_amplitudes(ops, cos1, r1, n2, k2):
+    """Fresnel amplitudes ``r_s``, ``r_p`` (each ``(re, im)``) of the lower boundary, layer
+    (index ``r1``, direction at cosine ``cos1``) to the medium of complex index ``n2 + i k2``.
+    With ``u = n2~ cos theta2 = sqrt(n2~^2 - r1^2 sin^2 theta1)`` (the decaying root; total
+    internal reflection where ``n2 < r1`` makes it imaginary): ``r_s = (r1 cos1 - u) / (r1
+    cos1 + u)``, ``r_p = (n2~^2 cos1 - r1 u) / (n2~^2 cos1 + r1 u)``."""
+    eps_re = n2 * n2 - k2 * k2
+    eps_im = 2.0 * n2 * k2
+    u = c_sqrt(ops, eps_re - r1 * r1 * ops.maximum(1.0 - cos1 * cos1, 0.0), eps_im)
+    a = r1 * cos1
+    rs = c_div(ops, (a - u[0], -u[1]), (a + u[0], u[1]))
+    e_cos = (eps_re * cos1, eps_im * cos1)
+    rp = c_div(ops, (e_cos[0] - r1 * u[0], e_cos[1] - r1 * u[1]), (e_cos[0] + r1 * u[0], e_cos[1] + r1 * u[1]))
+    return rs[0], rs[1], rp[0], rp[1]
+
+
+def beam_sums(a, r12, orders):
+    """One polarisation's ``(a^2, DC - a^2, Z1, Z2)`` of the beams (see above); ``Z2`` is None
+    with ``orders`` 1."""
+    b = ((1.0 - a * a) * r12[0], (1.0 - a * a) * r12[1])
+    c = (-a * r12[0], -a * r12[1])
+    bq = c_abs2(b) / (1.0 - c_abs2(c))  # |c| <= |a| < 1
+    z1 = (a * b[0] + bq * c[0], a * b[1] + bq * c[1])
+    if orders < 2:
+        return a * a, bq, z1, None
+    bc = c_mul(b, c)
+    cc = c_mul(c, c)
+    z2 = (a * bc[0] + bq * cc[0], a * bc[1] + bq * cc[1])
+    return a * a, bq, z1, z2
+
+
+@shader_function
+def film_beams(ops, cos0, cos1, r1, r0, n2, k2, *, orders=1):
+    """The film's reflectance at outside cosine ``cos0`` (in-layer cosine ``cos1``),
+    unpolarised (the mean of s and p) and split as the program's lobes need it: the top
+    reflection ``R01``, the transmitted beams' share ``T`` (their sum over every bounce,
+    without interference), and per harmonic m the coherence ``g_m = |Z_m| / sqrt(R01 T)``
+    and phase ``arg Z_m`` of its cosine (``2 sqrt(R01 T) g_m cos(2 m delta + arg Z_m)``)."""
+    rs, rp = top_amplitudes(ops, cos0, r0 / r1, cos1)
+    l_s = lower_amplitudes(ops, cos1, r1, n2, k2)
+    s = beam_sums(rs, (l_s[0], l_s[1]), orders)
+    p = beam_sums(rp, (l_s[2], l_s[3]), orders)
+    R01 = (s[0] + p[0]) * 0.5
+    T = (s[1] + p[1]) * 0.5
+    inv = 1.0 / ops.sqrt(ops.maximum(R01 * T, 1e-12))
+    out = dict(R01=R01, T=T)
+    for m in range(1, orders + 1):
+        z = ((s[1 + m][0] + p[1 + m][0]) * 0.5, (s[1 + m][1] + p[1 + m][1]) * 0.5)
+        out[f"g{m}"] = ops.sqrt(c_abs2(z)) * inv
+        out[f"phi{m}"] = gather(ops, [ops.atan2(y, x) for y, x in zip(channels(ops, z[1]), channels(ops, z[0]))])
+    return out
+
+
+@shader_function
+def fresnel_reflectance(ops, cos0, eta):
+    """Unpolarised Fresnel reflectance of the upper boundary at outside cosine ``cos0``
+    (``eta = r0 / r1``): total where the light cannot enter (a layer of lower index)."""
+    k = (1.0 - eta * eta) + eta * eta * (cos0 * cos0)
+    cos1 = ops.sqrt(ops.maximum(k, 0.0))
+    rs, rp = top_amplitudes(ops, cos0, eta, cos1)
+    return ops.select(ops.gt(k, 0.0), (rs * rs + rp * rp) * 0.5, 1.0)
+
+
+def interference_cosine(ops, lam, opd, slope, r1, phase, *, band, dispersion, footprint):
+    """``cos(2 pi D / lambda + phase)`` at the wavelength ``lam``, or with ``band`` integrated
+    over each RGB channel's band (:func:`band_cosine`)."""
+    if band:
+        return band_cosine(ops, opd, slope, r1, phase, dispersion=dispersion, footprint=footprint, shifted=True)
+    return ops.cos((2.0 * math.pi / lam) * opd + phase)
+
+
+@shader_function
+def film_amplitudes(ops, r1, lam, e0, e1, ks, r0, n2, k2, d, cos_v, cos_ls, cos_ci, tail, through, atten, *,
+                    interference=True, band=False, dispersion=True, footprint=False, orders=1):
+    """:func:`lobe_amplitudes` with thin-film optics (the physical mode): the reflected lobe
+    carries the top boundary's exact reflectance, the transmitted lobe what the lower
+    boundary reflects back through the top one (all its bounces), the interference lobe the
+    harmonics of :func:`film_beams` with their reflection phases.  The film's optics are taken
+    at the view's angle; the transmitted lobe's light side crosses the top boundary at its
+    own angle (``cos_ls``)."""
+    eta = r0 / r1
+    eta2 = eta * eta
+    s_o = ops.sqrt(ops.maximum((1.0 - eta2) + eta2 * (cos_v * cos_v), 0.0))  # <t_o, -n0>
+    f = film_beams(ops, cos_v, s_o, r1, r0, n2, k2, orders=orders)
+    AR_amp = f["R01"] * (ks * (e0 + 2.0) * INV_2PI)
+    # The transmitted beams cross the top boundary at l*, not at the view: (1 - R01(l*)) / (1 - R01(v)).
+    cross = (1.0 - fresnel_reflectance(ops, cos_ls, eta)) / ops.maximum(1.0 - f["R01"], 1e-6)
+    AT_amp = f["T"] * cross * tail * (ks * (e1 + 2.0) * INV_2PI / (r1 * r1))
+    AT = ops.select(through, AT_amp * cos_ls, 0.0)
+    if not interference:
+        return AR_amp * cos_v, AT, 0.0  # averaged over the band: the cosines have mean 0
+    s_i = ops.sqrt((1.0 - eta2) + eta2 * (cos_ci * cos_ci))
+    opd, slope = interference_path(ops, r1, d, s_i, s_o)
+    wave = f["g1"] * interference_cosine(ops, lam, opd, slope, r1, f["phi1"], band=band, dispersion=dispersion,
+                                         footprint=footprint)
+    if orders > 1:
+        wave = wave + f["g2"] * interference_cosine(ops, lam, opd * 2.0, slope * 2.0, r1, f["phi2"], band=band,
+                                                    dispersion=dispersion, footprint=footprint)
+    AI = ops.select(through, wave * ops.sqrt(AR_amp * AT_amp) * (atten * cos_ci) * 2.0, 0.0)
+    return AR_amp * cos_v, AT, AI
+
+
+@shader_function
+def film_diffuse_rho(ops, r1, r0, n2, k2, lam, d, *, band=False, dispersion=True, footprint=False, orders=1,
+                     interference=True):
+    """The diffuse part's factor with thin-film optics: light scattered under the layer
+    crosses the film twice, ``(1 - R_f)(1 - <R_f>)``, ``R_f`` the film's reflectance at
+    normal incidence (its interference integrated over the band with ``band``) and
+    ``<R_f>`` its mean over thickness; at most 1 - R_f, so the diffuse and the specular
+    light together never exceed what arrives."""
+    f = film_beams(ops, 1.0, 1.0, r1, r0, n2, k2, orders=orders)
+    mean = f["R01"] + f["T"]
+    rf = mean
+    if interference:
+        opd = r1 * (2.0 * d)
+        amp = 2.0 * ops.sqrt(f["R01"] * f["T"])
+        rf = rf + amp * f["g1"] * interference_cosine(ops, lam, opd, 2.0 * d, r1, f["phi1"], band=band,
+                                                      dispersion=dispersion, footprint=footprint)
+        if orders > 1:
+            rf = rf + amp * f["g2"] * interference_cosine(ops, lam, opd * 2.0, 4.0 * d, r1, f["phi2"], band=band,
+                                                          dispersion=dispersion, footprint=footprint)
+    return ops.clamp(1.0 - rf, 0.0, 1.0) * ops.clamp(1.0 - mean, 0.0, 1.0)
+
+
 # ---------------------------------------------------------------- the channels
 # A channel value is a scalar (one wavelength, the spectral modes) or a triple (the three
 # RGB channels at once, one component each: a shader evaluates them as one vector).  The
@@ -458,7 +634,7 @@ def interference_path(ops, r1, d, s_i, s_o):
 
 
 @shader_function
-def band_cosine(ops, opd, slope, r1, *, dispersion, footprint=False):
+def band_cosine(ops, opd, slope, r1, phase=0.0, *, dispersion, footprint=False, shifted=False):
     """The interference cosine ``cos(2 pi D / lambda)`` of a path difference ``D`` (nm; a
     triple, one per RGB channel, at the channel's index) integrated over each channel's
     band of the spectral ground truth, in closed form (docs/spectral.md, "Analytic mode"):
@@ -475,11 +651,15 @@ def band_cosine(ops, opd, slope, r1, *, dispersion, footprint=False):
     With ``footprint``, where the backend knows how much the path changes across the pixel
     (OSL's derivatives: ``w = filterwidth(D)``), each term is also averaged over a box of
     that width, to second order ``exp(-pi^2 nu^2 w^2 / 6)``: a thickness that varies within
-    a pixel (noise seen from far away) averages out instead of turning into noise."""
+    a pixel (noise seen from far away) averages out instead of turning into noise.
+
+    With ``shifted``, ``cos(2 pi D / lambda + phase)``: a reflection phase, constant over
+    the band, added to every term."""
     def rows(name):
         return ops.combine(*(ops.dot(r1, tuple(row)) for row in slot[name]))
 
     w = ops.footprint(opd) if footprint else None
+    shift = phase
     total = None
     for slot in band_fit()["slots"]:
         neg_b = tuple(-b for b in slot["damping"])
@@ -499,15 +679,24 @@ def band_cosine(ops, opd, slope, r1, *, dispersion, footprint=False):
             amplitude = tuple(slot["amplitude"])
         if w is not None:
             arg = ops.madd(w * w, tuple(-(math.pi * nu) ** 2 / 6.0 for nu in slot["wavenumber"]), arg)
+        if shifted:
+            phase = phase + shift
         wave = ops.exp(arg) * ops.cos(phase)
         total = wave * amplitude if total is None else ops.madd(wave, amplitude, total)
     return total
 
 
 def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM, band=False, dispersion=True, interference=True,
-                   footprint=False):
+                   footprint=False, optics="paper", orders=1):
     """``kd base rho_d`` per channel (eq. 14), the three channels as one triple; without
-    ``interference`` (a layer so thick that it averages out over the band) ``rho_d = 1``."""
+    ``interference`` (a layer so thick that it averages out over the band) ``rho_d = 1``
+    (with thin-film optics, the film's mean transmission, twice)."""
+    if optics == "physical":
+        rho = film_diffuse_rho(ops, ops.combine(*P["r1"]), P["r0"], ops.combine(*P["r2"]), ops.combine(*P["k2"]),
+                               ops.triple(*wavelengths), d, band=band, dispersion=dispersion, footprint=footprint,
+                               orders=orders, interference=interference)
+        colour = ops.named("diffuse_colour", ops.combine(*P["base"]) * (P["kd"] * rho))
+        return ops.components(colour)
     if not interference:
         return tuple(P["kd"] * b for b in P["base"])
     rho = diffuse_rho(ops, ops.combine(*P["r1"]), P["r0"], ops.triple(*wavelengths), d, band=band,
@@ -542,18 +731,24 @@ def channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, lobe="beckmann", interference=
 LOBE_PLACEMENT = ("cos_ls", "cos_ci", "tail", "through", "atten")  # what lobe_amplitudes takes from the lobes
 
 
-def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, lobe="beckmann", interference=True,
-                  band=False, footprint=False):
+def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, n2=None, k2=None, lobe="beckmann",
+                  interference=True, band=False, footprint=False, optics="paper", orders=1):
     """The channels' lobes (eqs. 3-11), the interference folded into the other two, and the
     normals, exponents, alphas and weights of their transmitted closures (``N_T0``.., one
     per lobe direction).  ``r1``, ``lam``: a scalar (one wavelength) or a triple (the RGB
     channels); ``r1_lobes``: the index that places the lobes, where the channels share
     them (equal indices), else ``r1``; ``band``: the interference integrated over each RGB
-    channel's band (the analytic mode), with ``footprint`` over the pixel's too."""
+    channel's band (the analytic mode), with ``footprint`` over the pixel's too; ``optics``:
+    the paper's amplitudes or thin-film optics' (:func:`film_amplitudes`, the lower medium
+    ``n2 + i k2``, ``orders`` harmonics)."""
     lobes = channel_lobes(ops, r1 if r1_lobes is None else r1_lobes, e0, e1, r0, n0, n1, v, lobe, interference)
-    AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, lobes["cos_v"],
-                                 *(spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT), interference=interference,
-                                 band=band, dispersion=r1_lobes is None, footprint=footprint)
+    placed = [spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT]
+    modes = dict(interference=interference, band=band, dispersion=r1_lobes is None, footprint=footprint)
+    if optics == "physical":
+        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, e1, ks, r0, n2, k2, d, lobes["cos_v"], *placed,
+                                     orders=orders, **modes)
+    else:
+        AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, lobes["cos_v"], *placed, **modes)
     if interference:
         AR, AT = fold_interference(ops, AR, AT, AI, {k: spread(ops, lobes[k], r1) for k in FOLD_BASIS})
     out = dict(lobes, AR=AR, w_T=AT * spread(ops, lobes["inv_peak_T"], r1))
@@ -561,8 +756,8 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, lob
 
 
 def spectral_step(ops, acc_R, acc_D, acc_T, r1, lam, m, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through,
-                  atten, uR=None, uT=None, uI=None, rRT=None, rRI=None, rTI=None, det=None,
-                  diffuse=True, interference=True):
+                  atten, uR=None, uT=None, uI=None, rRT=None, rRI=None, rTI=None, det=None, n2=None, k2=None,
+                  diffuse=True, interference=True, optics="paper", orders=1):
     """One wavelength of the spectral mode, chained: it takes the running sums of the
     reflected, diffuse and its lobe group's transmitted light and returns them updated, so
     a shader holds only the sums, whatever the number of wavelengths.  The lobes are its
@@ -575,14 +770,21 @@ def spectral_step(ops, acc_R, acc_D, acc_T, r1, lam, m, e0, e1, ks, r0, d, cos_v
     # only the running state stays alive, whatever the number of wavelengths (Cycles' SVM
     # has a stack of 255 floats).
     r1 = ops.after((acc_R, acc_D, acc_T), r1)
-    if diffuse and not interference:
-        out["acc_D"] = acc_D + m  # rho_d averaged over the band: 1
-    elif diffuse:
-        out["acc_D"] = acc_D + m * diffuse_rho(ops, r1, r0, lam, d)
-    else:
+    if not diffuse:
         out["acc_D"] = acc_D
-    AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through, atten,
-                                 interference=interference)
+    elif optics == "physical":
+        out["acc_D"] = acc_D + m * film_diffuse_rho(ops, r1, r0, n2, k2, lam, d, orders=orders,
+                                                    interference=interference)
+    elif not interference:
+        out["acc_D"] = acc_D + m  # rho_d averaged over the band: 1
+    else:
+        out["acc_D"] = acc_D + m * diffuse_rho(ops, r1, r0, lam, d)
+    if optics == "physical":
+        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, e1, ks, r0, n2, k2, d, cos_v, cos_ls, cos_ci, tail, through,
+                                     atten, interference=interference, orders=orders)
+    else:
+        AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through, atten,
+                                     interference=interference)
     if interference:
         AR, AT = fold_weights(ops, AR, AT, AI, uR, uT, uI, rRT, rRI, rTI, det)
     out["acc_R"] = acc_R + m * AR
@@ -645,9 +847,22 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     lams, K, M = t["wavelengths"], t["cauchy"], t["rgb"]
     groups, leads = spectral_groups(lams, plan.dispersion)
 
-    def index(j):
+    def through_channels(j, values, lo, hi):
         k = K[j]
-        return ops.clamp(k[0] * P["r1"][0] + k[1] * P["r1"][1] + k[2] * P["r1"][2], 0.1, 5.0)
+        return ops.clamp(k[0] * values[0] + k[1] * values[1] + k[2] * values[2], lo, hi)
+
+    def index(j):
+        return through_channels(j, P["r1"], 0.1, 5.0)
+
+    if plan.optics == "physical":
+        # The lower medium's n and k at each wavelength by the same map through the channels' values.
+        def physical(j):
+            return dict(n2=through_channels(j, P["r2"], 0.01, 10.0), k2=through_channels(j, P["k2"], 0.0, 20.0))
+        optics = dict(optics="physical", orders=2 if plan.multibeam else 1)
+    else:
+        def physical(j):
+            return {}
+        optics = {}
 
     order = sorted(leads)
     lead_r1 = gather(ops, [index(leads[g]) for g in order])
@@ -664,8 +879,8 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
         state = ops.call("spectral step", spectral_step,
                          dict(acc_R=acc_R, acc_D=acc_D, acc_T=acc_T[g], r1=index(j), lam=float(lam),
                               m=tuple(float(x) for x in m), e0=P["e0"], e1=P["e1"], ks=P["ks"], r0=P["r0"], d=d,
-                              cos_v=lobes["cos_v"], **{k: split[k][slot] for k in per_group}),
-                         diffuse=plan.diffuse, interference=plan.interference)
+                              cos_v=lobes["cos_v"], **{k: split[k][slot] for k in per_group}, **physical(j)),
+                         diffuse=plan.diffuse, interference=plan.interference, **optics)
         acc_R, acc_D, acc_T[g] = state["acc_R"], state["acc_D"], state["acc_T"]
     res = ShadingResult()
 
@@ -696,13 +911,17 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     if plan.spectral:
         return shade_spectral(ops, P, n0, n1, d, v, plan)
     res = ShadingResult()
+    optics = dict(optics="physical", orders=2 if plan.multibeam else 1) if plan.optics == "physical" else {}
     if plan.diffuse:
         res.diffuse = diffuse_colour(ops, P, d, wavelengths, band=plan.analytic, dispersion=plan.dispersion,
-                                     interference=plan.interference, footprint=plan.analytic and plan.footprint)
+                                     interference=plan.interference, footprint=plan.analytic and plan.footprint,
+                                     **optics)
     if not plan.specular:
         return res
     inputs = dict(r1=ops.combine(*P["r1"]), lam=tuple(float(x) for x in wavelengths), e0=P["e0"], e1=P["e1"],
                   ks=P["ks"], r0=P["r0"], n0=n0, n1=n1, v=v, d=d)
+    if optics:
+        inputs.update(n2=ops.combine(*P["r2"]), k2=ops.combine(*P["k2"]))
     if not plan.dispersion:
         # Equal indices: every channel's lobes have the same centre and exponent, placed
         # once (by green's index); each channel keeps its own amplitudes.
@@ -710,7 +929,7 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     # The analytic mode's variant of the block (the paper's RGB keeps its interference).
     band = dict(band=True, interference=plan.interference, footprint=plan.footprint) if plan.analytic else {}
     b = ops.call("channels" if plan.dispersion else "channels, shared lobes", channel_block, inputs, lobe=plan.lobe,
-                 **band)
+                 **band, **optics)
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
     w = ops.components(b["w_T"])
     if not plan.dispersion:
@@ -848,7 +1067,8 @@ def clamped_inputs(ops):
 def program_inputs(P):
     """The inputs of :func:`shade` from the per-parameter values ``P``."""
     return dict(r1=(P["r1_r"], P["r1_g"], P["r1_b"]), r0=P["r0"], e0=P["e0"], e1=P["e1"], ks=P["ks"], kd=P["kd"],
-                base=(P["base_r"], P["base_g"], P["base_b"]))
+                base=(P["base_r"], P["base_g"], P["base_b"]), r2=(P["r2_r"], P["r2_g"], P["r2_b"]),
+                k2=(P["k2_r"], P["k2_g"], P["k2_b"]))
 
 
 def base_weight(ops, r1, r0, cos_v):
@@ -856,6 +1076,23 @@ def base_weight(ops, r1, r0, cos_v):
     over the channels (a Mix Shader takes one factor)."""
     F = schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*r1), r0))
     return 1.0 - ops.dot(F, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
+
+
+CLEAR_K = 1e-3  # a lower medium of smaller extinction is clear: it passes on what enters it
+
+
+@shader_function
+def film_transmittance(ops, r1, r0, n2, k2, kd, cos_v):
+    """What reaches the Base Shader with thin-film optics: the light that the film neither
+    reflects (its mean reflectance at the view's angle, every bounce) nor gives to the
+    diffuse part (``kd``), where the lower medium is clear; a medium that absorbs (``k2``
+    above :data:`CLEAR_K`, a metal) keeps it.  The mean over the channels (a Mix Shader
+    takes one factor)."""
+    eta = r0 / r1
+    cos1 = ops.sqrt(ops.maximum((1.0 - eta * eta) + eta * eta * (cos_v * cos_v), 0.0))
+    f = film_beams(ops, cos_v, cos1, r1, r0, n2, k2)
+    passed = ops.clamp(1.0 - f["R01"] - f["T"], 0.0, 1.0) * ops.lt(k2, CLEAR_K)
+    return ops.dot(passed, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)) * (1.0 - kd)
 
 
 def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
@@ -878,8 +1115,15 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
     with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
         inputs = program_inputs(P)
         res = shade(ops, inputs, n0, n1, d, v, plan)
-    with ops.stage("What reaches the Base Shader: 1 - F(v)"):
-        cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-        transmitted = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
+    if plan.optics == "physical":
+        with ops.stage("What reaches the Base Shader: what the film neither reflects nor absorbs"):
+            cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
+            transmitted = film_transmittance(ops, ops.combine(*inputs["r1"]), inputs["r0"],
+                                             ops.combine(*inputs["r2"]), ops.combine(*inputs["k2"]), inputs["kd"],
+                                             cos_v)
+    else:
+        with ops.stage("What reaches the Base Shader: 1 - F(v)"):
+            cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
+            transmitted = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
     res.extras.update(thickness=d, lower_normal=n1, upper_normal=n0, base_weight=transmitted)
     return res
