@@ -57,7 +57,7 @@ CHOICES = (
     Choice("water", "Water", "dielectric", "both", "main/H2O/Daimon-20.0C",
            "dispersion formula, n only: k = 0 (water's k is below 1e-6 in 380-780 nm, "
            "Hale & Querry, main/H2O/Hale)"),
-    Choice("glass", "Glass (SCHOTT N-BK7)", "dielectric", "substrate", "specs/schott/N-BK7",
+    Choice("glass", "Glass (SCHOTT N-BK7)", "dielectric", "both", "specs/schott/N-BK7",
            "borosilicate crown; dispersion formula, n only: k = 0"),
     Choice("tio2_amorphous", "Titanium dioxide (amorphous)", "dielectric", "film",
            "main/TiO2/Jolivet-amorphous", ""),

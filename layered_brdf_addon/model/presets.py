@@ -4,6 +4,7 @@ Each preset is a mapping of overrides on :class:`LayeredParams` defaults.
 """
 from __future__ import annotations
 
+from .media import layer_index_values
 from .params import LayeredParams
 
 PAPER_PRESETS: dict[str, dict] = {
@@ -32,32 +33,37 @@ PAPER_PRESETS: dict[str, dict] = {
 }
 
 ARTIST_PRESETS: dict[str, dict] = {
-    # Tuned under Blender's bundled forest HDRI with a key sun, seen through AgX (docs/looks.md).
-    # A clear film: the transparent base shows what lies behind it.
-    "soap_bubble": dict(r1_r=1.33, r1_g=1.33, r1_b=1.33, d_min=150.0, d_max=900.0, thickness_mode="height",
-                        e0=800.0, e1=800.0, ks=1.0, kd=0.0, base_r=0.0, base_g=0.0, base_b=0.0,
-                        base_layer="transparent"),
-    # Rainbow bands on a dark wet base: a wide range of thickness in large, soft swirls, and a
-    # dimmer sharp reflection (wet asphalt reflects little) that keeps the bands saturated.
-    "oil_slick": dict(r1_r=1.45, r1_g=1.47, r1_b=1.5, d_min=100.0, d_max=1000.0, noise_scale=1.2,
-                      noise_detail=3.0, e0=1000.0, e1=1000.0, ks=0.6, kd=1.0,
-                      base_r=0.015, base_g=0.015, base_b=0.018),
-    # A jewel beetle: a high-index chitin layer thick enough for second-order green, which
-    # turns blue and violet towards grazing angles, over a dark base.
-    "beetle_shell": dict(r1_r=1.7, r1_g=1.75, r1_b=1.85, d_min=280.0, d_max=320.0, e0=500.0, e1=500.0,
-                         ks=1.0, kd=0.1, base_r=0.01, base_g=0.03, base_b=0.015),
-    # Titanium dioxide (index 2.2-2.45) on titanium: deep blue, purple where thinner, gold in the
-    # thinnest patches, over a dark grey metal.
-    "anodised_titanium": dict(r1_r=2.2, r1_g=2.3, r1_b=2.45, d_min=30.0, d_max=110.0, noise_scale=1.2,
-                              e0=800.0, e1=800.0, ks=1.0, kd=0.0, base_layer="metal",
-                              base_r=0.22, base_g=0.21, base_b=0.2),
-    # Bronze with patchy oxide films (high index, 0-120 nm): rough, tarnished, red-gold to blue patches.
-    "old_metal": dict(r1_r=2.4, r1_g=2.5, r1_b=2.7, d_min=0.0, d_max=120.0, noise_scale=3.0, noise_detail=3.0,
-                      noise_roughness=0.6, e0=200.0, e1=200.0, ks=0.5, kd=0.0, base_layer="metal",
-                      base_r=0.45, base_g=0.3, base_b=0.15),
-    # Terracotta under a glossy glaze: a thin glaze warms the body and tints the reflections.
-    "glazed_clay": dict(r1_r=1.4, r1_g=1.4, r1_b=1.4, d_min=60.0, d_max=95.0, noise_scale=2.0, e0=1500.0,
-                        e1=1500.0, ks=0.6, kd=0.8, base_r=0.5, base_g=0.2, base_b=0.1),
+    # Physical films (optics="physical": thin-film optics, measured media of model/data/media.json),
+    # tuned and guarded under Blender's bundled forest, courtyard and interior HDRIs (docs/looks.md).
+    # A soap film (water) with air on both sides: it reflects a few percent, in colours that run
+    # through the interference orders as it thickens downwards; the rest passes to the transparent
+    # base, so the background shows through.
+    "soap_bubble": dict(optics="physical", lower_medium="air", **layer_index_values("water"), d_min=150.0,
+                        d_max=900.0, thickness_mode="height", e0=3000.0, e1=3000.0, ks=1.0, kd=0.0, base_r=0.0,
+                        base_g=0.0, base_b=0.0, base_layer="transparent"),
+    # An oil film on water, over a dark wet base: a wide range of thickness in large, soft swirls.
+    "oil_slick": dict(optics="physical", lower_medium="water", **layer_index_values("oil"), d_min=100.0,
+                      d_max=600.0, noise_scale=1.2, noise_detail=3.0, e0=1500.0, e1=1500.0, ks=1.0, kd=0.3,
+                      base_r=0.01, base_g=0.01, base_b=0.012),
+    # A jewel beetle's cuticle: a chitin-like film over air (the cuticle's lamellae), thick enough
+    # for second-order green, over a dark, melanised base.
+    "beetle_shell": dict(optics="physical", lower_medium="air", **layer_index_values("chitin"), d_min=250.0,
+                         d_max=290.0, e0=800.0, e1=800.0, ks=1.0, kd=0.3, base_r=0.01, base_g=0.02,
+                         base_b=0.015),
+    # Anodised titanium: amorphous TiO2 on titanium (the metal is the film's lower boundary), the
+    # anodising sequence from gold (thinnest) through purple to blue.
+    "anodised_titanium": dict(optics="physical", lower_medium="titanium", **layer_index_values("tio2_amorphous"),
+                              d_min=25.0, d_max=75.0, noise_scale=1.2, e0=800.0, e1=800.0, ks=1.0, kd=0.0,
+                              base_layer="metal", base_r=0.22, base_g=0.21, base_b=0.2),
+    # Copper (bronze) under patchy oxide films of high index (cuprite-like, 2.4-2.7), 0-120 nm.
+    "old_metal": dict(optics="physical", lower_medium="copper", r1_r=2.4, r1_g=2.5, r1_b=2.7, d_min=0.0,
+                      d_max=120.0, noise_scale=3.0, noise_detail=3.0, noise_roughness=0.6, e0=200.0, e1=200.0,
+                      ks=1.0, kd=0.0, base_layer="metal", base_r=0.45, base_g=0.3, base_b=0.15),
+    # Terracotta under a thin glassy glaze (BK7-like) over an alumina-rich body: the glaze warms the
+    # body and tints the reflections.
+    "glazed_clay": dict(optics="physical", lower_medium="alumina", **layer_index_values("glass"), d_min=60.0,
+                        d_max=95.0, noise_scale=2.0, e0=1500.0, e1=1500.0, ks=1.0, kd=0.55, base_r=0.5,
+                        base_g=0.2, base_b=0.1),
 }
 
 # The paper's figures keep the paper's colour model (three wavelengths as R, G, B); new
