@@ -144,8 +144,7 @@ CLOSURE_WEIGHT_CUTOFF = 1e-5  # Cycles drops a closure whose mean weight is belo
 
 
 def program_inputs(params: LayeredParams) -> dict:
-    p = params
-    return dict(r1=p.r1, r0=p.r0, e0=p.e0, e1=p.e1, ks=p.ks, kd=p.kd, base=p.base_color)
+    return program.program_inputs(params.to_dict())
 
 
 def shade_closures(params: LayeredParams, n0, n1, d, v, plan: EffectPlan | None = None,

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from layered_brdf_addon.model.brdf import diffuse_rho, specular_brdf
+from layered_brdf_addon.model.brdf import layered_brdf
 from layered_brdf_addon.model.geometry import dot, reflect, safe_normalize
 from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
 
@@ -35,15 +35,13 @@ def _phong_pdf(axis, k, l):
 
 def brdf_times_cos(params: LayeredParams, n0, n1, d, v, l, wavelengths=WAVELENGTHS_NM):
     """``f(l, v) <n0, l>`` per channel for arrays of light directions ``l``."""
-    p = params
     cos_l = np.maximum(dot(n0, l), 0.0)
-    fs = specular_brdf(-l, np.broadcast_to(v, l.shape), n0, n1, p.r1, d, p.e0, p.e1, p.r0, wavelengths, ng=n0)
-    fd = diffuse_rho(p.r1, d, p.r0, wavelengths) * np.asarray(p.base_color) / np.pi
-    return cos_l[..., None] * (p.ks * fs + p.kd * fd)
+    f = layered_brdf(-l, np.broadcast_to(v, l.shape), n0, n1, d, params, ng=n0, wavelengths=wavelengths)
+    return cos_l[..., None] * f
 
 
 def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1.0, samples: int = 2048,
-                        seed: int = 0, wavelengths=WAVELENGTHS_NM, shading=None):
+                        seed: int = 0, wavelengths=WAVELENGTHS_NM, shading=None, environment=None):
     """Pixels (P, 3) under a uniform environment of ``radiance``, by Monte Carlo.
 
     Directions come from a mixture of cosine sampling (1/3) and a Phong lobe about the
@@ -51,6 +49,8 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
     estimator divides by the mixture density, so it is unbiased for any parameters.
     ``shading(params, n0, n1, d, l, v)`` (pixel per unit irradiance from ``l``) replaces
     the exact model, e.g. :func:`layered_brdf_reference.closures.closure_shading` for a white-furnace prediction.
+    ``environment(l)``: the radiance (..., 3) arriving from the directions ``l`` (an HDRI), times
+    ``radiance``; None: uniform.
     """
     rng = np.random.default_rng(seed)
     n0 = np.asarray(n0, dtype=float)
@@ -75,6 +75,8 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
             val = brdf_times_cos(params, N0, N1, D, V, l, wavelengths)
         else:
             val = shading(params, N0, N1, D, l, V)
+        if environment is not None:
+            val = val * environment(l)
         est = np.where(pdf[..., None] > 0, val / np.where(pdf > 0, pdf, 1.0)[..., None], 0.0)
         out += est.reshape(b, P, 3).sum(axis=0)
         done += b

@@ -12,10 +12,11 @@ import numpy as np
 from .geometry import Z_AXIS
 from .params import WAVELENGTHS_NM
 from . import ops_numpy
-from .program import interference_path
+from .program import film_beams, fresnel_reflectance, harmonics, interference_path
 from .spectral_band import channel_cosine
 
 TWO_PI = 2.0 * np.pi
+EXACT_HARMONICS = 4  # the exact model's thin-film optics: harmonics of the beams bouncing in the layer
 
 
 def fresnel_f0(r1, r0=1.0):
@@ -89,8 +90,14 @@ def _unit_rows(v, fallback=None):
 
 
 def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS,
-                   band=False) -> SpecularTerms:
+                   band=False, optics="paper", n2=None, k2=None, orders=1) -> SpecularTerms:
     """Evaluate eqs. 3-11 with the lobe normalisations of SPEC.
+
+    ``optics="physical"``: thin-film optics (:func:`.program.film_beams`) instead of the
+    paper's mirror: the exact Fresnel reflectance of the top boundary at the light's angle,
+    the transmitted beams of the lower medium ``n2 + i k2`` (channel triples) crossing the top
+    boundary at the light and the view, and ``orders`` harmonics of the interference with
+    their reflection phases, each direction pair on its own.
 
     ``band``: the analytic mode, ``r1`` the three RGB indices and the interference cosine
     of eq. 5 integrated over each channel's band (:func:`.spectral_band.channel_cosine`)
@@ -146,6 +153,9 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
     ti_to = -eta * eta * i_o[..., None] - eta * a_o * cos_l - eta * a_i * cos_v + a_i * a_o
     c_t = -(ti_to - 2.0 * ti_n1 * to_n1)  # <r_ti, -t_o>, eq. 10
     through = refracts & (ti_n1 < 0.0) & (to_n1 < 0.0) & ok[..., None]  # eq. 11
+    if optics == "physical":
+        return _film_terms(cos_l, cos_v, c_r, np.where(through, c_t, 0.0), s_i, s_o, r1, d, e0, e1, r0, lam, band,
+                           n2, k2, orders)
 
     # Transmitted part, eqs. 9-10, lobe normalised by (e1 + 2) / (2 pi r1^2) (SPEC).
     Tc = transmission_factor(-s_o, f)
@@ -163,9 +173,32 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
     return SpecularTerms(R, T, phase, rho)
 
 
-def specular_brdf(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS, band=False):
-    """The specular ``rho(i, o)`` of eq. 5, shape (..., C)."""
-    return specular_terms(i, o, n0, n1, r1, d, e0, e1, r0, wavelengths, ng, band).rho
+def _film_terms(cos_l, cos_v, c_r, c_t, s_i, s_o, r1, d, e0, e1, r0, lam, band, n2, k2, orders):
+    """The physical mode's terms of :func:`specular_terms` (see there), per channel."""
+    shape = np.broadcast_shapes(np.shape(cos_l), np.shape(r1), np.shape(s_i))
+
+    def v(x):
+        return ops_numpy.vec(np.broadcast_to(np.asarray(x, dtype=float), shape))
+
+    r1v, n2v, k2v = v(r1), v(n2), v(k2)
+    f = film_beams(ops_numpy, v(cos_l), v(s_i), r1v, r0, n2v, k2v, orders=orders)
+    R01, Tb = np.asarray(f["R01"]), np.asarray(f["T"])
+    R = R01 * phong_norm(e0) * phong_lobe(c_r, e0)
+    # The beams leave through the top boundary at the view, not at the light.
+    leave = (1.0 - np.asarray(fresnel_reflectance(ops_numpy, v(cos_v), r0 / r1v))) / np.maximum(1.0 - R01, 1e-6)
+    T = Tb * leave * (phong_norm(e1) / (r1 * r1)) * phong_lobe(c_t, e1)
+    opd, slope = interference_path(ops_numpy, r1, d, s_i, s_o)
+    phase = np.pi * opd / lam
+    waves = np.asarray(harmonics(ops_numpy, f, v(lam), v(opd), v(slope), r1v, orders, band=band, dispersion=True,
+                                 footprint=False))
+    rho = np.maximum(R + T + 2.0 * waves * np.sqrt(R * T), 0.0)
+    return SpecularTerms(R, T, phase, rho)
+
+
+def specular_brdf(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_NM, ng=Z_AXIS, band=False,
+                  **optics):
+    """The specular ``rho(i, o)`` of eq. 5, shape (..., C); ``optics``: see :func:`specular_terms`."""
+    return specular_terms(i, o, n0, n1, r1, d, e0, e1, r0, wavelengths, ng, band, **optics).rho
 
 
 def diffuse_rd(r1, r0=1.0):
@@ -219,6 +252,26 @@ def layered_brdf(i, o, n0, n1, d, params, ng=Z_AXIS, wavelengths=WAVELENGTHS_NM)
     accuracy mode integrates the interference over each channel's band."""
     p = params
     band = p.accuracy == "analytic"
+    if p.optics == "physical":
+        orders = EXACT_HARMONICS  # wherever the closures sum fewer
+        fs = specular_brdf(i, o, n0, n1, p.r1, d, p.e0, p.e1, p.r0, wavelengths, ng, band, optics="physical",
+                           n2=p.r2, k2=p.k2, orders=orders)
+        fd = film_diffuse(p, d, wavelengths, band, orders) * np.asarray(p.base_color) / np.pi
+        return p.ks * fs + p.kd * fd
     fs = specular_brdf(i, o, n0, n1, p.r1, d, p.e0, p.e1, p.r0, wavelengths, ng, band)
     fd = diffuse_rho(p.r1, d, p.r0, wavelengths, band) * np.asarray(p.base_color) / np.pi
     return p.ks * fs + p.kd * fd
+
+
+def film_diffuse(p, d, wavelengths=WAVELENGTHS_NM, band=False, orders=1):
+    """The physical mode's diffuse factor (:func:`.program.film_diffuse_rho`), shape (..., 3)."""
+    from .program import film_diffuse_rho
+
+    d = np.asarray(d, dtype=float)
+    shape = d.shape + (3,)
+
+    def v(x):
+        return ops_numpy.vec(np.broadcast_to(np.asarray(x, dtype=float), shape))
+
+    return np.asarray(film_diffuse_rho(ops_numpy, v(p.r1), p.r0, v(p.r2), v(p.k2), v(wavelengths),
+                                       d, band=band, orders=orders))

@@ -22,7 +22,7 @@ class EffectPlan:
     analytic: bool = False  # RGB channels with the interference integrated over each channel's band
     footprint: bool = True  # analytic: also over the pixel's footprint, where the backend has derivatives (OSL)
     optics: str = "paper"  # "paper": the lower boundary a perfect mirror; "physical": thin-film optics
-    multibeam: bool = False  # physical: the second harmonic of the beams that bounce inside the layer
+    multibeam: bool = False  # physical: the harmonics of the beams that bounce inside the layer (program.harmonic_count)
 
     @classmethod
     def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
@@ -66,7 +66,7 @@ class EffectPlan:
             out.append("no interference: the layer is thick enough for it to average out over the band")
         if self.optics == "physical":
             out.append("thin-film optics: exact Fresnel at both boundaries, reflection phases"
-                       + (", and the beams that bounce inside the layer (second harmonic)" if self.multibeam else ""))
+                       + (", and the beams that bounce inside the layer (a second harmonic)" if self.multibeam else ""))
         if self.specular:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")

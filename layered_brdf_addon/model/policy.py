@@ -29,7 +29,7 @@ INTERFERENCE_CUTOFF_OPTICAL_NM = 4146.0
 # Physical optics: the second harmonic (light bouncing twice inside the layer) is simulated where
 # its amplitude relative to the first, |r01 r12| at normal incidence, exceeds this (a film of high
 # index on a metal: TiO2 on titanium is 0.24; soap 0.02, oil on water 0.01; docs/physical-optics.md).
-MULTIBEAM_CONTRAST = 0.1
+MULTIBEAM_CONTRAST = 0.04
 
 #: The parameters whose value decides an effect, by the effect they decide.
 DECIDING_PARAMETERS = {

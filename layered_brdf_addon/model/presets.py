@@ -35,34 +35,37 @@ PAPER_PRESETS: dict[str, dict] = {
 ARTIST_PRESETS: dict[str, dict] = {
     # Physical films (optics="physical": thin-film optics, measured media of model/data/media.json),
     # tuned and guarded under Blender's bundled forest, courtyard and interior HDRIs (docs/looks.md).
+    # Each film is conformal, its lower boundary as rough as its upper one: e1 = e0 r1^2, so that
+    # the transmitted lobe, seen from outside (exponent e1 / r1^2), is as sharp as the reflection
+    # and the beams interfere where they coincide (docs/physical-optics.md).
     # A soap film (water) with air on both sides: it reflects a few percent, in colours that run
     # through the interference orders as it thickens downwards; the rest passes to the transparent
     # base, so the background shows through.
     "soap_bubble": dict(optics="physical", lower_medium="air", **layer_index_values("water"), d_min=150.0,
-                        d_max=900.0, thickness_mode="height", e0=3000.0, e1=3000.0, ks=1.0, kd=0.0, base_r=0.0,
+                        d_max=900.0, thickness_mode="height", e0=3000.0, e1=5350.0, ks=1.0, kd=0.0, base_r=0.0,
                         base_g=0.0, base_b=0.0, base_layer="transparent"),
     # An oil film on water, over a dark wet base: a wide range of thickness in large, soft swirls.
     "oil_slick": dict(optics="physical", lower_medium="water", **layer_index_values("oil"), d_min=100.0,
-                      d_max=600.0, noise_scale=1.2, noise_detail=3.0, e0=1500.0, e1=1500.0, ks=1.0, kd=0.3,
+                      d_max=600.0, noise_scale=1.2, noise_detail=3.0, e0=1500.0, e1=3210.0, ks=1.0, kd=0.3,
                       base_r=0.01, base_g=0.01, base_b=0.012),
     # A jewel beetle's cuticle: a chitin-like film over air (the cuticle's lamellae), thick enough
     # for second-order green, over a dark, melanised base.
     "beetle_shell": dict(optics="physical", lower_medium="air", **layer_index_values("chitin"), d_min=250.0,
-                         d_max=290.0, e0=800.0, e1=800.0, ks=1.0, kd=0.3, base_r=0.01, base_g=0.02,
+                         d_max=290.0, e0=800.0, e1=1960.0, ks=1.0, kd=0.3, base_r=0.01, base_g=0.02,
                          base_b=0.015),
     # Anodised titanium: amorphous TiO2 on titanium (the metal is the film's lower boundary), the
     # anodising sequence from gold (thinnest) through purple to blue.
     "anodised_titanium": dict(optics="physical", lower_medium="titanium", **layer_index_values("tio2_amorphous"),
-                              d_min=25.0, d_max=75.0, noise_scale=1.2, e0=800.0, e1=800.0, ks=1.0, kd=0.0,
+                              d_min=25.0, d_max=75.0, noise_scale=1.2, e0=800.0, e1=4860.0, ks=1.0, kd=0.0,
                               base_layer="metal", base_r=0.22, base_g=0.21, base_b=0.2),
     # Copper (bronze) under patchy oxide films of high index (cuprite-like, 2.4-2.7), 0-120 nm.
     "old_metal": dict(optics="physical", lower_medium="copper", r1_r=2.4, r1_g=2.5, r1_b=2.7, d_min=0.0,
-                      d_max=120.0, noise_scale=3.0, noise_detail=3.0, noise_roughness=0.6, e0=200.0, e1=200.0,
+                      d_max=120.0, noise_scale=3.0, noise_detail=3.0, noise_roughness=0.6, e0=200.0, e1=1250.0,
                       ks=1.0, kd=0.0, base_layer="metal", base_r=0.45, base_g=0.3, base_b=0.15),
     # Terracotta under a thin glassy glaze (BK7-like) over an alumina-rich body: the glaze warms the
     # body and tints the reflections.
     "glazed_clay": dict(optics="physical", lower_medium="alumina", **layer_index_values("glass"), d_min=60.0,
-                        d_max=95.0, noise_scale=2.0, e0=1500.0, e1=1500.0, ks=1.0, kd=0.55, base_r=0.5,
+                        d_max=95.0, noise_scale=2.0, e0=1500.0, e1=3470.0, ks=1.0, kd=0.55, base_r=0.5,
                         base_g=0.2, base_b=0.1),
 }
 

@@ -276,7 +276,7 @@ FOLD_BASIS = ("uR", "uT", "uI", "rRT", "rRI", "rTI", "det")
 # per polarisation, with a = r01 (real: the layer and the outside are clear), b = t01 t10 r12
 # = (1 - a^2) r12, c = r10 r12 = -a r12 and q = 1 / (1 - |c|^2):
 #
-#     DC = a^2 + |b|^2 q,   Z1 = a b + |b|^2 q c,   Z2 = a b c + |b|^2 q c^2.
+#     DC = a^2 + |b|^2 q,   Z1 = a b + |b|^2 q c,   Z_m = c^(m-1) Z1.
 #
 # DC - a^2 is the transmitted lobe's share; Z1 and Z2 are its interference with the top
 # reflection, each integrated over a colour band in closed form like the paper's cosine.
@@ -331,19 +331,18 @@ def lower_amplitudes(ops, cos1, r1, n2, k2):
     return rs[0], rs[1], rp[0], rp[1]
 
 
-def beam_sums(a, r12, orders):
-    """One polarisation's ``(a^2, DC - a^2, Z1, Z2)`` of the beams (see above); ``Z2`` is None
-    with ``orders`` 1."""
+def beam_sums(ops, a, r12, orders):
+    """One polarisation's ``(a^2, DC - a^2, [Z1, Z2, ...])`` of the beams (see above): the
+    m-th harmonic is ``Z_m = c^(m-1) Z1``.  ``|c| <= |a| < 1`` but at grazing incidence, where
+    ``|a| -> 1`` and ``b -> 0`` (total internal reflection below makes ``|r12| = 1``): the floor
+    keeps ``0 / 0`` at 0."""
     b = ((1.0 - a * a) * r12[0], (1.0 - a * a) * r12[1])
     c = (-a * r12[0], -a * r12[1])
-    bq = c_abs2(b) / (1.0 - c_abs2(c))  # |c| <= |a| < 1
-    z1 = (a * b[0] + bq * c[0], a * b[1] + bq * c[1])
-    if orders < 2:
-        return a * a, bq, z1, None
-    bc = c_mul(b, c)
-    cc = c_mul(c, c)
-    z2 = (a * bc[0] + bq * cc[0], a * bc[1] + bq * cc[1])
-    return a * a, bq, z1, z2
+    bq = c_abs2(b) / ops.maximum(1.0 - c_abs2(c), 1e-6)
+    z = [(a * b[0] + bq * c[0], a * b[1] + bq * c[1])]
+    for _ in range(1, orders):
+        z.append(c_mul(z[-1], c))
+    return a * a, bq, z
 
 
 @shader_function
@@ -355,14 +354,14 @@ def film_beams(ops, cos0, cos1, r1, r0, n2, k2, *, orders=1):
     and phase ``arg Z_m`` of its cosine (``2 sqrt(R01 T) g_m cos(2 m delta + arg Z_m)``)."""
     rs, rp = top_amplitudes(ops, cos0, r0 / r1, cos1)
     l_s = lower_amplitudes(ops, cos1, r1, n2, k2)
-    s = beam_sums(rs, (l_s[0], l_s[1]), orders)
-    p = beam_sums(rp, (l_s[2], l_s[3]), orders)
+    s = beam_sums(ops, rs, (l_s[0], l_s[1]), orders)
+    p = beam_sums(ops, rp, (l_s[2], l_s[3]), orders)
     R01 = (s[0] + p[0]) * 0.5
     T = (s[1] + p[1]) * 0.5
     inv = 1.0 / ops.sqrt(ops.maximum(R01 * T, 1e-12))
     out = dict(R01=R01, T=T)
     for m in range(1, orders + 1):
-        z = ((s[1 + m][0] + p[1 + m][0]) * 0.5, (s[1 + m][1] + p[1 + m][1]) * 0.5)
+        z = ((s[2][m - 1][0] + p[2][m - 1][0]) * 0.5, (s[2][m - 1][1] + p[2][m - 1][1]) * 0.5)
         out[f"g{m}"] = ops.sqrt(c_abs2(z)) * inv
         out[f"phi{m}"] = gather(ops, [ops.atan2(y, x) for y, x in zip(channels(ops, z[1]), channels(ops, z[0]))])
     return out
@@ -384,6 +383,18 @@ def interference_cosine(ops, lam, opd, slope, r1, phase, *, band, dispersion, fo
     if band:
         return band_cosine(ops, opd, slope, r1, phase, dispersion=dispersion, footprint=footprint, shifted=True)
     return ops.cos((2.0 * math.pi / lam) * opd + phase)
+
+
+def harmonics(ops, f, lam, opd, slope, r1, orders, *, band, dispersion, footprint):
+    """``sum_m g_m cos(2 pi m D / lambda + phi_m)`` over the ``orders`` harmonics of
+    :func:`film_beams` (the m-th travels the path ``m D``), each integrated over the band
+    with ``band``."""
+    wave = None
+    for m in range(1, orders + 1):
+        c = interference_cosine(ops, lam, opd * float(m), slope * float(m), r1, f[f"phi{m}"], band=band,
+                                dispersion=dispersion, footprint=footprint)
+        wave = f[f"g{m}"] * c if wave is None else wave + f[f"g{m}"] * c
+    return wave
 
 
 @shader_function
@@ -408,11 +419,7 @@ def film_amplitudes(ops, r1, lam, e0, e1, ks, r0, n2, k2, d, cos_v, cos_ls, cos_
         return AR_amp * cos_v, AT, 0.0  # averaged over the band: the cosines have mean 0
     s_i = ops.sqrt((1.0 - eta2) + eta2 * (cos_ci * cos_ci))
     opd, slope = interference_path(ops, r1, d, s_i, s_o)
-    wave = f["g1"] * interference_cosine(ops, lam, opd, slope, r1, f["phi1"], band=band, dispersion=dispersion,
-                                         footprint=footprint)
-    if orders > 1:
-        wave = wave + f["g2"] * interference_cosine(ops, lam, opd * 2.0, slope * 2.0, r1, f["phi2"], band=band,
-                                                    dispersion=dispersion, footprint=footprint)
+    wave = harmonics(ops, f, lam, opd, slope, r1, orders, band=band, dispersion=dispersion, footprint=footprint)
     AI = ops.select(through, wave * ops.sqrt(AR_amp * AT_amp) * (atten * cos_ci) * 2.0, 0.0)
     return AR_amp * cos_v, AT, AI
 
@@ -429,13 +436,9 @@ def film_diffuse_rho(ops, r1, r0, n2, k2, lam, d, *, band=False, dispersion=True
     mean = f["R01"] + f["T"]
     rf = mean
     if interference:
-        opd = r1 * (2.0 * d)
-        amp = 2.0 * ops.sqrt(f["R01"] * f["T"])
-        rf = rf + amp * f["g1"] * interference_cosine(ops, lam, opd, 2.0 * d, r1, f["phi1"], band=band,
-                                                      dispersion=dispersion, footprint=footprint)
-        if orders > 1:
-            rf = rf + amp * f["g2"] * interference_cosine(ops, lam, opd * 2.0, 4.0 * d, r1, f["phi2"], band=band,
-                                                          dispersion=dispersion, footprint=footprint)
+        wave = harmonics(ops, f, lam, r1 * (2.0 * d), 2.0 * d, r1, orders, band=band, dispersion=dispersion,
+                         footprint=footprint)
+        rf = rf + wave * (2.0 * ops.sqrt(f["R01"] * f["T"]))
     return ops.clamp(1.0 - rf, 0.0, 1.0) * ops.clamp(1.0 - mean, 0.0, 1.0)
 
 
@@ -858,7 +861,7 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
         # The lower medium's n and k at each wavelength by the same map through the channels' values.
         def physical(j):
             return dict(n2=through_channels(j, P["r2"], 0.01, 10.0), k2=through_channels(j, P["k2"], 0.0, 20.0))
-        optics = dict(optics="physical", orders=2 if plan.multibeam else 1)
+        optics = dict(optics="physical", orders=harmonic_count(plan))
     else:
         def physical(j):
             return {}
@@ -911,7 +914,7 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     if plan.spectral:
         return shade_spectral(ops, P, n0, n1, d, v, plan)
     res = ShadingResult()
-    optics = dict(optics="physical", orders=2 if plan.multibeam else 1) if plan.optics == "physical" else {}
+    optics = dict(optics="physical", orders=harmonic_count(plan)) if plan.optics == "physical" else {}
     if plan.diffuse:
         res.diffuse = diffuse_colour(ops, P, d, wavelengths, band=plan.analytic, dispersion=plan.dispersion,
                                      interference=plan.interference, footprint=plan.analytic and plan.footprint,
@@ -1078,21 +1081,36 @@ def base_weight(ops, r1, r0, cos_v):
     return 1.0 - ops.dot(F, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
 
 
+HARMONICS_MULTIBEAM = 2  # harmonics of the interference where the plan keeps the beams that bounce inside
+
+
+def harmonic_count(plan: EffectPlan) -> int:
+    """How many harmonics of the interference the plan's thin-film optics sum."""
+    return HARMONICS_MULTIBEAM if plan.multibeam else 1
+
+
 CLEAR_K = 1e-3  # a lower medium of smaller extinction is clear: it passes on what enters it
 
 
 @shader_function
-def film_transmittance(ops, r1, r0, n2, k2, kd, cos_v):
+def film_transmittance(ops, r1, r0, n2, k2, kd, cos_v, *, orders=1):
     """What reaches the Base Shader with thin-film optics: the light that the film neither
-    reflects (its mean reflectance at the view's angle, every bounce) nor gives to the
-    diffuse part (``kd``), where the lower medium is clear; a medium that absorbs (``k2``
-    above :data:`CLEAR_K`, a metal) keeps it.  The mean over the channels (a Mix Shader
-    takes one factor)."""
+    reflects nor gives to the diffuse part (``kd``), where the lower medium is clear; a medium
+    that absorbs (``k2`` above :data:`CLEAR_K`, a metal) keeps it.  A Mix Shader takes one
+    factor for every channel, and the film's reflectance at a point lies anywhere between the
+    troughs and crests of its interference: the factor is what passes where the film reflects
+    most, ``1 - max(DC + 2 sqrt(R01 T) sum g_m)`` over the channels, so that reflected and
+    passed light never add up to more than arrives."""
     eta = r0 / r1
     cos1 = ops.sqrt(ops.maximum((1.0 - eta * eta) + eta * eta * (cos_v * cos_v), 0.0))
-    f = film_beams(ops, cos_v, cos1, r1, r0, n2, k2)
-    passed = ops.clamp(1.0 - f["R01"] - f["T"], 0.0, 1.0) * ops.lt(k2, CLEAR_K)
-    return ops.dot(passed, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)) * (1.0 - kd)
+    f = film_beams(ops, cos_v, cos1, r1, r0, n2, k2, orders=orders)
+    swing = f["g1"]
+    for m in range(2, orders + 1):
+        swing = swing + f[f"g{m}"]
+    crest = f["R01"] + f["T"] + 2.0 * ops.sqrt(f["R01"] * f["T"]) * swing
+    passed = ops.clamp(1.0 - crest, 0.0, 1.0) * ops.lt(k2, CLEAR_K)
+    r, g, b = ops.components(passed)
+    return ops.minimum(ops.minimum(r, g), b) * (1.0 - kd)
 
 
 def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
@@ -1120,7 +1138,7 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
             cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
             transmitted = film_transmittance(ops, ops.combine(*inputs["r1"]), inputs["r0"],
                                              ops.combine(*inputs["r2"]), ops.combine(*inputs["k2"]), inputs["kd"],
-                                             cos_v)
+                                             cos_v, orders=harmonic_count(plan))
     else:
         with ops.stage("What reaches the Base Shader: 1 - F(v)"):
             cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)

@@ -1,0 +1,118 @@
+"""The colour of a smooth film's mirror reflection: the add-on's shading program against tmm.
+
+The model side runs the program's amplitude step in numpy on parallel boundaries, with the
+reflected, transmitted and interference lobes coinciding at the mirror direction and
+normalised to 1 (``ks = 1``, ``(e + 2) / (2 pi) = 1``), so that the lobes integrated about
+the mirror direction read as the film's reflectance per RGB channel (linear Rec.709).  The
+reference is tmm's unpolarised reflectance spectrum of air | film | below with the media's
+measured ``n(lambda)``, ``k(lambda)``, seen under D65 (:mod:`.thin_film`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from layered_brdf_addon.model import ops_numpy as O
+from layered_brdf_addon.model import program
+from layered_brdf_addon.model.media import layer_index_values, spectrum
+from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
+from layered_brdf_addon.model.policy import plan_effects
+
+from . import thin_film as tf
+
+OUTSIDE_INDEX = 1.0  # air above the film
+UNIT_LOBE_EXPONENT = 2.0 * math.pi - 2.0  # (e + 2) / (2 pi) = 1
+ANGLES_DEG = (0.0, 30.0, 60.0)
+ACCURACIES = ("analytic", "rgb")
+OPTICS = ("physical", "paper")
+
+
+@dataclass(frozen=True)
+class FilmCase:
+    """A film medium on a lower medium over a range of thicknesses (nm)."""
+
+    name: str
+    film: str
+    below: str
+    d_min: float
+    d_max: float
+
+    def thicknesses(self, *, step_nm: float | None = None, count: int | None = None) -> np.ndarray:
+        """The range sampled every ``step_nm``, or at ``count`` even steps (both ends included)."""
+        if count is None:
+            count = int(round((self.d_max - self.d_min) / step_nm)) + 1
+        return np.linspace(self.d_min, self.d_max, count)
+
+
+CASES = (
+    FilmCase("soap (water on air)", "water", "air", 100.0, 1000.0),
+    FilmCase("oil on water", "oil", "water", 100.0, 1000.0),
+    FilmCase("chitin on air", "chitin", "air", 100.0, 1000.0),
+    FilmCase("TiO2 on titanium", "tio2_amorphous", "titanium", 20.0, 300.0),
+    FilmCase("TiO2 on aluminium", "tio2_amorphous", "aluminium", 20.0, 300.0),
+)
+
+
+def film_params(film: str, below: str, thickness_nm, optics: str = "physical",
+                accuracy: str = "analytic") -> LayeredParams:
+    """The material of a smooth film of ``film`` on ``below`` over the given thicknesses."""
+    d = np.asarray(thickness_nm, dtype=float)
+    return LayeredParams.from_dict(dict(
+        layer_index_values(film), optics=optics, lower_medium=below, accuracy=accuracy, r0=OUTSIDE_INDEX,
+        ks=1.0, e0=UNIT_LOBE_EXPONENT, e1=UNIT_LOBE_EXPONENT, d_min=float(d.min()), d_max=float(d.max()),
+        normal_mode="parallel"))
+
+
+def model_film_rgb(film: str, below: str, thickness_nm, theta_deg: float, optics: str = "physical",
+                   accuracy: str = "analytic") -> np.ndarray:
+    """The model's reflectance of the smooth film, linear Rec.709, one row per thickness:
+    ``(AR + r1^2 AT + r1 AI) / cos_v`` of the program's amplitudes at the mirror direction
+    (``AT`` carries the in-layer lobe's ``1 / r1^2``, ``AI`` the square root of both)."""
+    p = film_params(film, below, thickness_nm, optics, accuracy)
+    plan = plan_effects(p)
+    d = np.atleast_1d(np.asarray(thickness_nm, dtype=float))
+    cos_v = np.full(d.shape, math.cos(math.radians(theta_deg)))
+    one = np.ones(d.shape)
+    r1 = O.triple(*p.r1)
+    e = UNIT_LOBE_EXPONENT
+    lobes = (cos_v, cos_v, one, one, one)  # cos_ls, cos_ci, tail, through, atten: the mirror direction
+    modes = dict(interference=plan.interference, band=plan.analytic, dispersion=plan.dispersion, footprint=False)
+    lam = O.triple(*WAVELENGTHS_NM)
+    if optics == "physical":
+        AR, AT, AI = program.film_amplitudes(O, r1, lam, e, e, p.ks, p.r0, O.triple(*p.r2), O.triple(*p.k2), d,
+                                             cos_v, *lobes, orders=2 if plan.multibeam else 1, **modes)
+    else:
+        AR, AT, AI = program.lobe_amplitudes(O, r1, lam, e, e, p.ks, p.r0, d, cos_v, *lobes, **modes)
+    R = (AR + r1 * r1 * AT + r1 * AI) / cos_v
+    return np.broadcast_to(np.asarray(R, dtype=float), d.shape + (3,)).copy()
+
+
+def rgb_to_lab(rgb) -> np.ndarray:
+    """Lab (D65) of linear Rec.709 RGB (last axis)."""
+    return tf.xyz_to_lab(tf.linear_rec709_to_xyz(rgb))
+
+
+def complex_index(name: str, wavelengths_nm) -> np.ndarray:
+    """``n + 1j k`` of a medium at the given wavelengths (the table's 10 nm samples interpolated)."""
+    n, k = spectrum(name, wavelengths_nm)
+    return np.asarray(n) + 1j * np.asarray(k)
+
+
+def reference_film_lab(film: str, below: str, thickness_nm, theta_deg: float,
+                       wavelengths_nm=tf.WAVELENGTHS_NM) -> np.ndarray:
+    """Lab (D65) of tmm's reflectance spectrum of air | film | below, one row per thickness."""
+    lams = np.asarray(wavelengths_nm, dtype=float)
+    return tf.film_lab(OUTSIDE_INDEX, complex_index(film, lams), complex_index(below, lams),
+                       np.atleast_1d(thickness_nm), theta_deg, lams)
+
+
+def film_errors(film: str, below: str, thickness_nm, theta_deg: float, optics: str = "physical",
+                accuracy: str = "analytic", reference_lab=None) -> np.ndarray:
+    """CIEDE2000 between the model's and tmm's colour of the film, one per thickness;
+    ``reference_lab``: :func:`reference_film_lab` of the same arguments, where already known."""
+    if reference_lab is None:
+        reference_lab = reference_film_lab(film, below, thickness_nm, theta_deg)
+    model = rgb_to_lab(model_film_rgb(film, below, thickness_nm, theta_deg, optics, accuracy))
+    return tf.delta_e_2000(model, reference_lab)

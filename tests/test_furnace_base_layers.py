@@ -1,0 +1,95 @@
+"""White furnace with what lies under the layer attached: under a uniform white world, no
+preset returns more light than it receives, whatever its base layer (none, the artist's own
+shader, a clear film, a metal), with thin-film optics.  The paper's optics are measured too:
+its lower boundary is a perfect mirror and its interference term is not bounded, so the figure
+presets exceed 1 by the paper's own amount (docs/physical-optics.md has the table)."""
+from __future__ import annotations
+
+import bpy
+import numpy as np
+import pytest
+
+from layered_brdf_addon.model import PRESETS, preset
+from layered_brdf_addon.model.geometry import dot
+from layered_brdf_addon.model.sphere import sphere_geometry
+
+pytestmark = pytest.mark.slow
+
+BASE_LAYERS = ("none", "own", "transparent", "metal")  # "own": a white Diffuse BSDF in the Base Shader input
+HEIGHT = 32
+SAMPLES = 64
+# p95 over the ball, per channel, of the rendered radiance under a world of radiance 1.
+LIMIT = 1.0
+NOISE = 0.03  # the 95th percentile of a 64-sample render sits this far above its mean at most
+
+
+def furnace_row(params_list, own_base: list[bool]):
+    from layered_brdf_addon.blender import scene as S
+
+    from render_helpers import render_row
+
+    row = render_row(params_list, backend="nodes", height=HEIGHT, samples=1)
+    for mat, own in zip(row.materials, own_base):
+        if own:
+            from layered_brdf_addon.blender.material import shader_node
+
+            tree = mat.node_tree
+            diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+            diffuse.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+            tree.links.new(diffuse.outputs[0], shader_node(mat).inputs["Base Shader"])
+    scene = bpy.context.scene
+    scene.cycles.samples = SAMPLES
+    scene.cycles.max_bounces = 8
+    scene.cycles.transparent_max_bounces = 8
+    S.set_uniform_environment(1.0)
+    row.passes = S.render_passes()
+    return row
+
+
+def p95_per_sphere(row) -> list[np.ndarray]:
+    geo = sphere_geometry(row.camera, row.centers)
+    out = []
+    for k in range(len(row.params)):
+        sel = geo.mask & (geo.sphere == k) & (dot(geo.n0, geo.view) > 0.2)
+        out.append(np.percentile(row.passes.beauty[sel][:, :3], 95, axis=0))
+    return out
+
+
+def _cases(optics: str):
+    cases = []
+    for name in sorted(PRESETS):
+        for base in BASE_LAYERS:
+            p = preset(name).replace(optics=optics, base_layer="none" if base == "own" else base)
+            cases.append((f"{name}/{base}", p, base == "own"))
+    return cases
+
+
+@pytest.fixture(scope="module")
+def physical():
+    cases = _cases("physical")
+    row = furnace_row([c[1] for c in cases], [c[2] for c in cases])
+    return {c[0]: v for c, v in zip(cases, p95_per_sphere(row))}
+
+
+@pytest.mark.keeps_scene
+@pytest.mark.parametrize("case", [c[0] for c in _cases("physical")])
+def test_no_preset_returns_more_light_than_it_receives(physical, case):
+    got = physical[case]
+    print(f"{case}: p95 {got.round(3)}")
+    assert np.all(got <= LIMIT + NOISE), f"{case} returns {got.round(3)} of the light it receives"
+
+
+def measure(optics: str) -> dict:
+    cases = _cases(optics)
+    row = furnace_row([c[1] for c in cases], [c[2] for c in cases])
+    return {c[0]: v for c, v in zip(cases, p95_per_sphere(row))}
+
+
+if __name__ == "__main__":  # the furnace table of docs/physical-optics.md
+    tables = {optics: measure(optics) for optics in ("paper", "physical")}
+    print("| preset | base layer | paper optics (p95 R, G, B) | physical optics (p95 R, G, B) |")
+    print("| --- | --- | --- | --- |")
+    for case in tables["physical"]:
+        name, base = case.split("/")
+        cells = [", ".join(f"{x:.2f}" for x in tables[o][case]) for o in ("paper", "physical")]
+        print(f"| {name} | {base} | {cells[0]} | {cells[1]} |")
