@@ -70,6 +70,7 @@ class Variant:
     preset: str | None = None
     accuracy: str | None = None
     material: object = field(default=None, repr=False)
+    optics: str | None = None
     nodes: int | None = None  # nodes the layered node group interprets
 
     @property
@@ -78,7 +79,7 @@ class Variant:
 
     def record(self) -> dict:
         return dict(label=self.label, backend=self.backend, preset=self.preset, accuracy=self.accuracy,
-                    nodes=self.nodes)
+                    nodes=self.nodes, optics=self.optics)
 
 
 def stock_variants() -> list[Variant]:
@@ -132,27 +133,33 @@ def floor_variants() -> list[Variant]:
     return [kept_variant(label, closure_floor_material(label, glossy)) for label, glossy in CLOSURE_FLOORS]
 
 
-def layered_variant(obj, preset_name: str, backend: str, accuracy: str) -> Variant:
-    """The layered material of a preset, built by the add-on on ``obj`` and then kept aside."""
+def layered_variant(obj, preset_name: str, backend: str, accuracy: str, optics: str | None = None) -> Variant:
+    """The layered material of a preset (in ``optics``, default its own), built by the add-on on
+    ``obj`` and then kept aside."""
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.model import preset
 
-    label = f"{preset_name} {accuracy} {backend}"
+    params = preset(preset_name).replace(accuracy=accuracy, **({"optics": optics} if optics else {}))
+    label = f"{preset_name} {accuracy} {params.optics} {backend}"
     obj.material_slots[0].material = None  # so that the add-on makes a new material
-    mat = apply_layered_material(obj, preset(preset_name).replace(accuracy=accuracy), backend, name=label)
+    mat = apply_layered_material(obj, params, backend, name=label)
     mat.use_fake_user = True
-    v = Variant(label, backend, preset_name, accuracy, mat)
+    v = Variant(label, backend, preset_name, accuracy, mat, optics=params.optics)
     if backend == "nodes":
         v.nodes = interpreted_nodes(mat.node_tree)
     return v
 
 
-def layered_variants(obj, presets, backends, spectral_preset, spectral_modes) -> list[Variant]:
+def layered_variants(obj, presets, backends, spectral_preset, spectral_modes, paper_optics=False) -> list[Variant]:
     """Every preset x backend in its own accuracy mode (the paper's figures RGB, the artist
-    presets analytic), then the other accuracy modes of one preset."""
+    presets analytic), then the other accuracy modes of one preset; with ``paper_optics``, each
+    preset of physical optics also with the paper's (what thin-film optics cost)."""
     from layered_brdf_addon.model import preset
 
     combos = [(p, b, preset(p).accuracy) for p in presets for b in backends]
+    if paper_optics:
+        combos += [(p, b, preset(p).accuracy, "paper") for p in presets for b in backends
+                   if preset(p).optics == "physical"]
     own = preset(spectral_preset).accuracy
     combos += [(spectral_preset, b, m) for m in spectral_modes if m != own for b in backends]
     if spectral_preset not in presets:
@@ -372,13 +379,13 @@ def table(d: dict) -> str:
              f"1 thread, default bounces; cost per sample from {lo} and {hi} samples (process CPU time), "
              f"{s['reps']} interleaved repetitions; Blender {d['machine']['bpy']}, "
              f"{d['machine']['cpu_count']} CPUs; run took {d['seconds'] / 60:.0f} min.", "",
-             "| material | backend | accuracy | nodes interpreted | ms / sample min / median / max "
-             "| x Principled + Thin Film |", "|---|---|---|---|---|---|"]
+             "| material | backend | accuracy | optics | nodes interpreted | ms / sample min / median / max "
+             "| x Principled + Thin Film |", "|---|---|---|---|---|---|---|"]
     for r in d["cycles"]:
         p = r["per_sample"]
         flag = "" if r["magenta"] < MAGENTA_FAILED else " (magenta)"
         lines.append(f"| {r['preset'] or r['label']}{flag} | {r['backend']} | {r['accuracy'] or ''} | "
-                     f"{r['nodes'] if r['nodes'] is not None else ''} | "
+                     f"{r.get('optics') or ''} | {r['nodes'] if r['nodes'] is not None else ''} | "
                      f"{1e3 * p['min']:.0f} / {1e3 * p['median']:.0f} / {1e3 * p['max']:.0f} | "
                      f"{r['vs_reference']:.2f} |")
     e = d.get("eevee", {})
@@ -421,6 +428,8 @@ def parse_args(argv=None):
     ap.add_argument("--no-eevee", action="store_true", help="skip the EEVEE part")
     ap.add_argument("--spectral-modes", nargs="*", choices=ACCURACY_MODES,
                     help=f"accuracy modes measured for {SPECTRAL_PRESET} (default: all)")
+    ap.add_argument("--paper-optics", action="store_true",
+                    help="also measure each physical-optics preset with the paper's optics")
     ap.add_argument("--out", type=Path, default=OUT_JSON, help="the JSON to write")
     args = ap.parse_args(argv)
     base = {**DEFAULTS, "presets": tuple(PRESETS), "spectral_modes": ACCURACY_MODES,
@@ -442,7 +451,8 @@ def main(argv=None):
     t0 = time.perf_counter()
     obj = build_scene()
     variants = (stock_variants() + floor_variants()
-                + layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET, args.spectral_modes))
+                + layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET, args.spectral_modes,
+                                   args.paper_optics))
     d = dict(machine=machine_info(), seconds=0.0,
              settings=dict(size=SIZE, subdiv=SUBDIV_LEVELS, hdri=hdri_path().name, sun=SUN_STRENGTH,
                            samples=args.samples, reps=args.reps, threads=1, seed=SEED, quick=args.quick,

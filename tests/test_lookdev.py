@@ -91,12 +91,16 @@ def test_principled_thin_film_equivalent_of_a_preset():
     p = preset("anodised_titanium")
     kw = L.thin_film_equivalent("anodised_titanium", p)
     assert kw["thickness_nm"] == pytest.approx((p.d_min + p.d_max) / 2) and kw["ior"] == p.r1_g
-    assert kw["metallic"] == 1.0 and tuple(kw["base_color"]) == p.base_color
+    # The metal under the film (titanium's n and k): its reflectance at normal incidence.
+    assert kw["metallic"] == 1.0 and kw["base_color"][0] == pytest.approx(
+        ((p.r2_r - 1) ** 2 + p.k2_r ** 2) / ((p.r2_r + 1) ** 2 + p.k2_r ** 2))
+    assert kw["thickness_noise"] == (p.d_min, p.d_max, p.noise_scale, p.noise_detail, p.noise_roughness)
+    assert L.thin_film_equivalent("soap_bubble", preset("soap_bubble"))["transmission"] == 1.0
     assert kw["roughness"] == pytest.approx(math.sqrt(math.sqrt(2.0 / (p.e0 + 2.0))))
     assert L.thin_film_equivalent("oil_slick", preset("oil_slick"))["metallic"] == 0.0
     mat = L.principled_thin_film("TF", **kw)
     bsdf = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
-    assert bsdf.inputs["Thin Film Thickness"].default_value == pytest.approx(kw["thickness_nm"])
+    assert bsdf.inputs["Thin Film Thickness"].links[0].from_node.bl_idname == "ShaderNodeMapRange"
     assert bsdf.inputs["Thin Film IOR"].default_value == pytest.approx(kw["ior"])
     assert bsdf.inputs["Metallic"].default_value == 1.0
     assert bsdf.inputs["Roughness"].default_value == pytest.approx(kw["roughness"])

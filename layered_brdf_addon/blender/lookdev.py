@@ -282,25 +282,45 @@ def remove_scene(scene) -> None:
 
 # ---------------------------------------------------------------------------
 # Principled BSDF + Thin Film
-def _principled_tree(mat, base_color, metallic: float, roughness: float, thin_film: tuple | None = None):
+def _principled_tree(mat, base_color, metallic: float, roughness: float, thin_film: tuple | None = None,
+                     transmission: float = 0.0, thickness_noise: tuple | None = None):
     nt = mat.node_tree
     nt.nodes.clear()
     bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
     bsdf.inputs["Base Color"].default_value = tuple(base_color)[:3] + (1.0,)
     bsdf.inputs["Metallic"].default_value = metallic
     bsdf.inputs["Roughness"].default_value = roughness
+    if transmission > 0.0:  # a clear film: light passes through unbent
+        bsdf.inputs["Transmission Weight"].default_value = transmission
+        bsdf.inputs["IOR"].default_value = 1.0
     if thin_film is not None:
         bsdf.inputs["Thin Film Thickness"].default_value = thin_film[0]
         bsdf.inputs["Thin Film IOR"].default_value = thin_film[1]
+    if thin_film is not None and thickness_noise is not None:
+        # The film's thickness from the same noise as the layered material's, over its range.
+        d_min, d_max, scale, detail, rough = thickness_noise
+        coords = nt.nodes.new("ShaderNodeTexCoord")
+        noise = nt.nodes.new("ShaderNodeTexNoise")
+        noise.inputs["Scale"].default_value = scale
+        noise.inputs["Detail"].default_value = detail
+        noise.inputs["Roughness"].default_value = rough
+        span = nt.nodes.new("ShaderNodeMapRange")
+        span.inputs["To Min"].default_value = d_min
+        span.inputs["To Max"].default_value = d_max
+        nt.links.new(coords.outputs["Object"], noise.inputs["Vector"])
+        nt.links.new(noise.outputs["Fac"], span.inputs["Value"])
+        nt.links.new(span.outputs["Result"], bsdf.inputs["Thin Film Thickness"])
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
     return bsdf
 
 
 def principled_thin_film(name: str, thickness_nm: float, ior: float, base_color, metallic: float,
-                         roughness: float):
+                         roughness: float, transmission: float = 0.0, thickness_noise: tuple | None = None):
     """A new material: Principled BSDF with Thin Film (``thickness_nm``, film ``ior``),
-    ``base_color`` (RGB in [0, 1]), ``metallic`` and ``roughness`` in [0, 1]."""
+    ``base_color`` (RGB in [0, 1]), ``metallic``, ``roughness`` and ``transmission`` in [0, 1];
+    ``thickness_noise`` ``(d_min, d_max, scale, detail, roughness)``: the film's thickness from a
+    Noise Texture in object space over ``d_min..d_max`` instead of ``thickness_nm``."""
     checks = (("thickness_nm", thickness_nm, 0.0, 100000.0), ("ior", ior, 1.0, 1000.0),
               ("metallic", metallic, 0.0, 1.0), ("roughness", roughness, 0.0, 1.0))
     for pname, value, lo, hi in checks:
@@ -310,7 +330,8 @@ def principled_thin_film(name: str, thickness_nm: float, ior: float, base_color,
     if len(color) not in (3, 4) or not all(isinstance(c, (int, float)) and 0.0 <= c <= 1.0 for c in color[:3]):
         raise ParameterError("base_color", base_color, "three numbers in [0, 1]")
     mat = bpy.data.materials.new(name)
-    _principled_tree(mat, color[:3], float(metallic), float(roughness), (float(thickness_nm), float(ior)))
+    _principled_tree(mat, color[:3], float(metallic), float(roughness), (float(thickness_nm), float(ior)),
+                     float(transmission), thickness_noise)
     return mat
 
 
@@ -322,9 +343,20 @@ def thin_film_equivalent(name: str, params: LayeredParams) -> dict[str, Any]:
     the middle of d_min..d_max, its index the green one (r1_g), the base colour, metallic
     1 for a preset whose name says metal or titanium (else 0), and the roughness of the
     upper Phong exponent e0 through Beckmann's alpha = sqrt(2 / (e0 + 2)) and Principled's
-    roughness = sqrt(alpha).  The keyword arguments of :func:`principled_thin_film`."""
+    roughness = sqrt(alpha).  The keyword arguments of :func:`principled_thin_film`.
+
+    A fair baseline: a noise-driven film takes the same noise over the same range; a clear
+    film (transparent base) transmits; with physical optics over a metal, the base colour is
+    the metal's reflectance at normal incidence, ``((n - 1)^2 + k^2) / ((n + 1)^2 + k^2)``."""
     alpha = math.sqrt(2.0 / (params.e0 + 2.0))
-    return dict(thickness_nm=0.5 * (params.d_min + params.d_max), ior=params.r1_g,
-                base_color=params.base_color,
-                metallic=1.0 if any(w in name.lower() for w in METAL_WORDS) else 0.0,
-                roughness=min(1.0, math.sqrt(alpha)))
+    metallic = 1.0 if any(w in name.lower() for w in METAL_WORDS) else 0.0
+    colour = params.base_color
+    if params.optics == "physical" and metallic:
+        colour = tuple(((n - 1.0) ** 2 + k * k) / ((n + 1.0) ** 2 + k * k) for n, k in zip(params.r2, params.k2))
+    out = dict(thickness_nm=0.5 * (params.d_min + params.d_max), ior=params.r1_g, base_color=colour,
+               metallic=metallic, roughness=min(1.0, math.sqrt(alpha)),
+               transmission=1.0 if params.base_layer == "transparent" else 0.0)
+    if params.thickness_mode == "noise" and params.d_min != params.d_max:
+        out["thickness_noise"] = (params.d_min, params.d_max, params.noise_scale, params.noise_detail,
+                                  params.noise_roughness)
+    return out

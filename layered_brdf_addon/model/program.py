@@ -1081,7 +1081,7 @@ def base_weight(ops, r1, r0, cos_v):
     return 1.0 - ops.dot(F, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
 
 
-HARMONICS_MULTIBEAM = 2  # harmonics of the interference where the plan keeps the beams that bounce inside
+HARMONICS_MULTIBEAM = 3  # harmonics of the interference where the plan keeps the beams that bounce inside
 
 
 def harmonic_count(plan: EffectPlan) -> int:
