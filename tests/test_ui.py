@@ -323,7 +323,7 @@ def test_a_material_built_before_the_analytic_default_keeps_its_colour_model(tmp
     analytic mode, and keep it whatever the default becomes."""
     obj = plain_object()
     mat = load_preset(obj, "oil_slick")
-    assert properties.settings(mat).accuracy == "analytic" and built_plan(mat).endswith("A")
+    assert properties.settings(mat).accuracy == "analytic" and "A" in built_plan(mat)[6:]
     assert properties.settings(mat).is_property_set("accuracy")
     assert mat["layered_brdf_enums"]["accuracy"] == "analytic"
     # What a file saved before the change holds: an RGB build, no accuracy written anywhere.

@@ -223,8 +223,10 @@ def input_linked(node, name: str) -> bool:
 
 
 def read_inputs(node, base: LayeredParams | None = None) -> LayeredParams:
-    """Parameters from the shader node's sockets (enums from the material's stored settings)."""
-    values = {spec.name: input_value(node, spec.name) for spec in iter_sockets()}
+    """Parameters from the shader node's sockets (enums from the material's stored settings); a
+    parameter newer than the node (a file saved before it existed) keeps ``base``'s value."""
+    values = {spec.name: input_value(node, spec.name) for spec in iter_sockets()
+              if param_socket(node, spec.name)[0] is not None}
     return LayeredParams.from_dict(values, base=base or LayeredParams())
 
 
