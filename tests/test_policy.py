@@ -33,6 +33,8 @@ OFF = {
     # A soap-like film over a dielectric: the second harmonic is below MULTIBEAM_CONTRAST.
     "multibeam": (BASE.replace(optics="physical", r1_r=1.33, r1_g=1.33, r1_b=1.33, r2_r=1.0, r2_g=1.0, r2_b=1.0),
                   lambda plan: plan.multibeam),
+    # A metal under the film keeps what enters it: nothing to hand to the Base Shader.
+    "passes": (BASE.replace(optics="physical", lower_medium="titanium"), lambda plan: plan.passes),
 }
 DECIDING = [(effect, name) for effect, names in DECIDING_PARAMETERS.items() for name in names]
 
@@ -155,6 +157,6 @@ def test_second_harmonic_only_where_the_layer_bounces_light_back():
     from layered_brdf_addon.model.media import layer_index_values, lower_medium_values
 
     film = BASE.replace(optics="physical", **layer_index_values("tio2_amorphous"), **lower_medium_values("titanium"))
-    assert plan_effects(film).multibeam and plan_effects(film).key.endswith("T2")
+    assert plan_effects(film).multibeam and plan_effects(film).key.endswith("T2o")  # o: titanium absorbs
     assert not plan_effects(film.replace(optics="paper")).multibeam
     assert not plan_effects(film.replace(r2_r=2.4, r2_g=2.47, r2_b=2.55, k2_r=0.0, k2_g=0.0, k2_b=0.0)).multibeam

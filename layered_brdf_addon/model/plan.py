@@ -23,6 +23,7 @@ class EffectPlan:
     footprint: bool = True  # analytic: also over the pixel's footprint, where the backend has derivatives (OSL)
     optics: str = "paper"  # "paper": the lower boundary a perfect mirror; "physical": thin-film optics
     multibeam: bool = False  # physical: the harmonics of the beams that bounce inside the layer (program.harmonic_count)
+    passes: bool = True  # physical: the lower medium may pass light to the Base Shader (False: it absorbs, a metal)
 
     @classmethod
     def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
@@ -43,7 +44,7 @@ class EffectPlan:
         if not self.interference:
             parts.append("i")
         if self.optics == "physical":
-            parts.append("T2" if self.multibeam else "T")
+            parts.append(("T2" if self.multibeam else "T") + ("" if self.passes else "o"))
         return "".join(parts)
 
     def to_dict(self) -> dict:
@@ -66,7 +67,8 @@ class EffectPlan:
             out.append("no interference: the layer is thick enough for it to average out over the band")
         if self.optics == "physical":
             out.append("thin-film optics: exact Fresnel at both boundaries, reflection phases"
-                       + (", and the beams that bounce inside the layer (a second harmonic)" if self.multibeam else ""))
+                       + (", and the beams that bounce inside the layer (more harmonics)" if self.multibeam else "")
+                       + ("" if self.passes else "; an absorbing lower medium: nothing reaches the Base Shader"))
         if self.specular:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")

@@ -14,6 +14,7 @@ from typing import Iterable
 
 from .params import LayeredParams, ParameterError
 from .plan import EffectPlan
+from .program import CLEAR_K
 
 #: The shader backends: a node group of stock nodes, or an OSL shader (Cycles CPU / OptiX).
 BACKENDS = ("nodes", "osl")
@@ -46,6 +47,7 @@ DECIDING_PARAMETERS = {
     "dispersion": ("r1_r", "r1_g", "r1_b"),
     "interference": ("d_min", "r1_r", "r1_g", "r1_b", "r0"),
     "multibeam": ("r1_r", "r1_g", "r1_b", "r0", "r2_r", "r2_g", "r2_b", "k2_r", "k2_g", "k2_b"),
+    "passes": ("k2_r", "k2_g", "k2_b"),
 }
 
 
@@ -91,10 +93,11 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
     interference = not (banded and not moving("interference") and interference_averages_out(p))
     physical = p.optics == "physical"
     multibeam = physical and interference and (moving("multibeam") or beam_contrast(p) > MULTIBEAM_CONTRAST)
+    passes = not physical or moving("passes") or min(p.k2) < CLEAR_K
     return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
                       thickness=thickness, normals=normals, dispersion=dispersion, lobe=p.lobe,
                       spectral=spectral, interference=interference, analytic=analytic, optics=p.optics,
-                      multibeam=multibeam)
+                      multibeam=multibeam, passes=passes)
 
 
 def beam_contrast(p: LayeredParams) -> float:

@@ -65,7 +65,7 @@ ARTIST_PRESETS: dict[str, dict] = {
     # Terracotta under a thin glassy glaze (BK7-like) over an alumina-rich body: the glaze warms the
     # body and tints the reflections.
     "glazed_clay": dict(optics="physical", lower_medium="alumina", **layer_index_values("glass"), d_min=60.0,
-                        d_max=95.0, noise_scale=2.0, e0=1500.0, e1=3470.0, ks=1.0, kd=0.55, base_r=0.5,
+                        d_max=95.0, noise_scale=2.0, e0=1500.0, e1=3470.0, ks=1.0, kd=0.4, base_r=0.5,
                         base_g=0.2, base_b=0.1),
 }
 

@@ -1133,7 +1133,9 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
     with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
         inputs = program_inputs(P)
         res = shade(ops, inputs, n0, n1, d, v, plan)
-    if plan.optics == "physical":
+    if plan.optics == "physical" and not plan.passes:
+        transmitted = 0.0  # an absorbing lower medium (a metal) keeps what enters it
+    elif plan.optics == "physical":
         with ops.stage("What reaches the Base Shader: what the film neither reflects nor absorbs"):
             cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
             transmitted = film_transmittance(ops, ops.combine(*inputs["r1"]), inputs["r0"],
