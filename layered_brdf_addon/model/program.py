@@ -637,7 +637,7 @@ def interference_path(ops, r1, d, s_i, s_o):
 
 
 @shader_function
-def band_cosine(ops, opd, slope, r1, phase=0.0, *, dispersion, footprint=False, shifted=False):
+def band_cosine(ops, opd, slope, r1, offset=0.0, *, dispersion, footprint=False, shifted=False):
     """The interference cosine ``cos(2 pi D / lambda)`` of a path difference ``D`` (nm; a
     triple, one per RGB channel, at the channel's index) integrated over each channel's
     band of the spectral ground truth, in closed form (docs/spectral.md, "Analytic mode"):
@@ -656,13 +656,12 @@ def band_cosine(ops, opd, slope, r1, phase=0.0, *, dispersion, footprint=False, 
     that width, to second order ``exp(-pi^2 nu^2 w^2 / 6)``: a thickness that varies within
     a pixel (noise seen from far away) averages out instead of turning into noise.
 
-    With ``shifted``, ``cos(2 pi D / lambda + phase)``: a reflection phase, constant over
+    With ``shifted``, ``cos(2 pi D / lambda + offset)``: a reflection phase, constant over
     the band, added to every term."""
     def rows(name):
         return ops.combine(*(ops.dot(r1, tuple(row)) for row in slot[name]))
 
     w = ops.footprint(opd) if footprint else None
-    shift = phase
     total = None
     for slot in band_fit()["slots"]:
         neg_b = tuple(-b for b in slot["damping"])
@@ -683,7 +682,7 @@ def band_cosine(ops, opd, slope, r1, phase=0.0, *, dispersion, footprint=False, 
         if w is not None:
             arg = ops.madd(w * w, tuple(-(math.pi * nu) ** 2 / 6.0 for nu in slot["wavenumber"]), arg)
         if shifted:
-            phase = phase + shift
+            phase = phase + offset
         wave = ops.exp(arg) * ops.cos(phase)
         total = wave * amplitude if total is None else ops.madd(wave, amplitude, total)
     return total
@@ -857,15 +856,13 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     def index(j):
         return through_channels(j, P["r1"], 0.1, 5.0)
 
-    if plan.optics == "physical":
-        # The lower medium's n and k at each wavelength by the same map through the channels' values.
-        def physical(j):
-            return dict(n2=through_channels(j, P["r2"], 0.01, 10.0), k2=through_channels(j, P["k2"], 0.0, 20.0))
-        optics = dict(optics="physical", orders=harmonic_count(plan))
-    else:
-        def physical(j):
+    optics = optics_settings(plan)
+
+    def lower_medium(j):
+        """The lower medium's n and k at wavelength j, by the same map through the channels' values."""
+        if not optics:
             return {}
-        optics = {}
+        return dict(n2=through_channels(j, P["r2"], 0.01, 10.0), k2=through_channels(j, P["k2"], 0.0, 20.0))
 
     order = sorted(leads)
     lead_r1 = gather(ops, [index(leads[g]) for g in order])
@@ -882,7 +879,7 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
         state = ops.call("spectral step", spectral_step,
                          dict(acc_R=acc_R, acc_D=acc_D, acc_T=acc_T[g], r1=index(j), lam=float(lam),
                               m=tuple(float(x) for x in m), e0=P["e0"], e1=P["e1"], ks=P["ks"], r0=P["r0"], d=d,
-                              cos_v=lobes["cos_v"], **{k: split[k][slot] for k in per_group}, **physical(j)),
+                              cos_v=lobes["cos_v"], **{k: split[k][slot] for k in per_group}, **lower_medium(j)),
                          diffuse=plan.diffuse, interference=plan.interference, **optics)
         acc_R, acc_D, acc_T[g] = state["acc_R"], state["acc_D"], state["acc_T"]
     res = ShadingResult()
@@ -914,7 +911,7 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     if plan.spectral:
         return shade_spectral(ops, P, n0, n1, d, v, plan)
     res = ShadingResult()
-    optics = dict(optics="physical", orders=harmonic_count(plan)) if plan.optics == "physical" else {}
+    optics = optics_settings(plan)
     if plan.diffuse:
         res.diffuse = diffuse_colour(ops, P, d, wavelengths, band=plan.analytic, dispersion=plan.dispersion,
                                      interference=plan.interference, footprint=plan.analytic and plan.footprint,
@@ -1087,6 +1084,11 @@ HARMONICS_MULTIBEAM = 3  # harmonics of the interference where the plan keeps th
 def harmonic_count(plan: EffectPlan) -> int:
     """How many harmonics of the interference the plan's thin-film optics sum."""
     return HARMONICS_MULTIBEAM if plan.multibeam else 1
+
+
+def optics_settings(plan: EffectPlan) -> dict:
+    """The settings that select thin-film optics in the program's steps (none: the paper's)."""
+    return dict(optics="physical", orders=harmonic_count(plan)) if plan.optics == "physical" else {}
 
 
 CLEAR_K = 1e-3  # a lower medium of smaller extinction is clear: it passes on what enters it
