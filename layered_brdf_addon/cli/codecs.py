@@ -4,9 +4,11 @@ Nothing here imports bpy.
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 from pathlib import Path
-from typing import Mapping
+from typing import Iterator, Mapping
 
 import numpy as np
 
@@ -49,9 +51,50 @@ def read_exr_layers(path: str | os.PathLike) -> dict[str, dict[str, np.ndarray]]
     return out
 
 
-def exr_beauty(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray | None]:
-    """The Combined pass of a Blender multilayer EXR: RGB (H, W, 3) and alpha (or None)."""
-    for channels in read_exr_layers(path).values():
+@contextlib.contextmanager
+def muted_stderr() -> Iterator[None]:
+    """Send what is printed on the standard error (file descriptor 2) to /dev/null for the block.
+
+    OpenEXR's library prints a line for every damaged chunk of a file cut short; the
+    caller that reads such a file says what went wrong in one line instead.
+    """
+    sys.stderr.flush()
+    saved = os.dup(2)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+
+
+def read_complete_exr_layers(path: str | os.PathLike) -> dict[str, dict[str, np.ndarray]]:
+    """:func:`read_exr_layers` of a file that holds every part and channel its header lists;
+    else ValueError naming what is missing.
+
+    OpenEXR's Python binding leaves out, with only a warning, a part whose pixels cannot
+    be read: a file cut short (by a full disk) would read as a file with fewer passes.
+    """
+    import OpenEXR
+
+    layers = read_exr_layers(path)
+    with OpenEXR.File(str(path), header_only=True) as f:
+        listed = [(part.name(), [c.name for c in part.header.get("channels", [])]) for part in f.parts]
+    missing = [name for name, channels in listed
+               if name not in layers or any(c not in layers[name] for c in channels)]
+    if missing:
+        raise ValueError(f"{path} is incomplete: the pixels of part(s) {', '.join(map(str, missing))} "
+                         "cannot be read")
+    return layers
+
+
+def exr_beauty(path: str | os.PathLike, layers: Mapping[str, Mapping[str, np.ndarray]] | None = None
+               ) -> tuple[np.ndarray, np.ndarray | None]:
+    """The Combined pass of a Blender multilayer EXR: RGB (H, W, 3) and alpha (or None),
+    from ``layers`` when they were read already."""
+    for channels in (read_exr_layers(path) if layers is None else layers).values():
         for prefix in ("ViewLayer.Combined.", "Combined.", ""):
             keys = [prefix + c for c in "RGB"]
             if all(k in channels for k in keys):

@@ -8,8 +8,9 @@ contact sheet;
 the material's parameters are derived from
 :data:`~layered_brdf_addon.model.params.PARAM_SPECS`.
 
-Exit codes: 0 success; 1 a render or a batch job failed; 2 invalid input (nothing
-written); 130 interrupted (no partial files left).
+Exit codes: 0 success; 1 a render or a batch job failed, or an output could not be
+written (a full disk: one line with the OS's reason, nothing written); 2 invalid input
+(nothing written); 130 interrupted (no partial files left).
 """
 from __future__ import annotations
 
@@ -18,12 +19,13 @@ import contextlib
 import re
 import sys
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any, Collection, Iterable, Iterator, Sequence
 
 from .. import __version__
 from ..model import policy
 from ..model.params import PARAM_SPECS, ParameterError, ParamSpec
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
+from .staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 
 PROG = "layered-brdf"
 COMMANDS = ("lookdev", "gallery", "render", "batch")
@@ -332,16 +334,33 @@ def cmd_batch(ns: argparse.Namespace) -> int:
             write_report(report, {"jobfile": str(Path(ns.jobfile).absolute()),
                                   "results": [r.to_dict() for r in results]})
         except OSError as e:
-            print(f"{PROG}: error: could not write --report {report}: {e}", file=sys.stderr)
+            print(f"{PROG}: error: could not write --report {report}: {os_reason(e)}", file=sys.stderr)
             return EXIT_FAILED
     return exit_code(results)
 
 
-def _hint(e: ParameterError) -> str:
+def _hint(e: ParameterError, options: Collection[str]) -> str:
+    """`` (option --NAME)`` after the message of a value given on the command line.
+
+    Only for an option of the command that runs (``options``: its dests): a job file's
+    ``output`` is no ``batch --output``, and a value read from a file
+    (:class:`~.requests.FileValueError`) names that file and its key instead.
+    """
+    from .requests import FileValueError
+
+    if isinstance(e, FileValueError) or e.name not in options:
+        return ""
     if any(s.name == e.name for s in PARAM_SPECS) or e.name in ("sun_strength", "output", "resolution", "size",
                                                                   "samples", "presets", "hdri", "columns"):
         return f" (option --{e.name.replace('_', '-')})"
     return ""
+
+
+def _write_failed(e: Exception) -> int:
+    """Say that an output could not be written (a full disk, with the OS's reason), without a
+    traceback: the staged outputs were removed, earlier files kept.  Returns the exit code."""
+    print(f"{PROG}: error: {e}; no output was written", file=sys.stderr)
+    return EXIT_FAILED
 
 
 def normalise_argv(argv: Sequence[str]) -> list[str]:
@@ -366,12 +385,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_gallery(ns, argv)
         return cmd_lookdev(ns, argv)
     except ParameterError as e:
-        print(f"{PROG}: error: {e}{_hint(e)}", file=sys.stderr)
+        print(f"{PROG}: error: {e}{_hint(e, vars(ns))}", file=sys.stderr)
         return EXIT_INVALID
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; no partial output was left", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except WriteError as e:
+        return _write_failed(e)
     except Exception as e:  # a render that Blender could not do: report it, exit 1
+        if isinstance(e, OSError) and e.errno in FULL_DISK_ERRNOS:
+            return _write_failed(write_error(e))
         import traceback
 
         traceback.print_exc(file=sys.stderr)

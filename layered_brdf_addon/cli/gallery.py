@@ -19,7 +19,7 @@ from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects
 from ..model.presets import PAPER_PRESETS, preset
 from .codecs import to_srgb8
-from .requests import check_output, float_option, int_option, parse_sun
+from .requests import check_output, check_preset_names, float_option, int_option, parse_sun
 from .sidecar import camera_to_dict, sun_to_dict
 from .staging import OutputPaths, output_stem
 
@@ -191,6 +191,17 @@ class GallerySettings:
                    strength=default.strength if self.sun_strength is None else self.sun_strength)
 
 
+def check_preset_lobe(name: str, backend: str) -> None:
+    """Raise :class:`ParameterError` naming ``presets`` (the option that chose it) unless
+    ``backend`` builds the lobe of preset ``name``."""
+    lobe = preset(name).lobe
+    if not policy.supports(backend, lobe):
+        others = [b for b in policy.BACKENDS if policy.supports(b, lobe)]
+        hint = f"; choose --backend {' or '.join(others)}" if others else ""
+        raise ParameterError("presets", name, f"presets whose lobe the {backend} backend builds "
+                             f"(the lobe of {name} is {lobe!r}{hint})")
+
+
 def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     """Validate gallery options (``output``, ``size``, ``samples``, ``backend``, ...) without Blender."""
     o = {k: v for k, v in options.items() if v is not None}
@@ -203,14 +214,9 @@ def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     strength = float_option("sun_strength", o["sun_strength"], 0.0, 1e6) if "sun_strength" in o else None
     seed = int_option("seed", o.get("seed", 0), 0, 2**31 - 1)
     threads = int_option("threads", o.get("threads", 2), 1, 1024)
-    names = tuple(o.get("presets") or PAPER_PRESETS)
-    if not names or len(set(names)) != len(names):
-        raise ParameterError("presets", list(names), "distinct preset names")
+    names = check_preset_names(o.get("presets") or PAPER_PRESETS)
     for name in names:
-        try:
-            policy.check_backend(backend, preset(name).lobe)
-        except ParameterError as e:
-            raise ParameterError(e.name, e.value, f"{e.allowed} (preset {name})") from None
+        check_preset_lobe(name, backend)
     output = check_output(o.get("output", DEFAULT_OUTPUT))
     return GallerySettings(output=output, size=size, samples=samples, backend=backend, columns=columns, sun=sun,
                            sun_strength=strength, seed=seed, threads=threads, presets=names)

@@ -11,6 +11,7 @@ its sidecar ``STEM.json`` appear together or not at all.
 """
 from __future__ import annotations
 
+import contextlib
 import sys
 import tempfile
 import time
@@ -22,12 +23,12 @@ import numpy as np
 
 from ..model.params import ParameterError
 from ..model.policy import plan_effects
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset, preset_label
-from .codecs import save_png
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
+from .codecs import muted_stderr, save_png
 from .gallery import GalleryLayout, compose_sheet, layout_for
 from .render_job import view_png_encoding
-from .requests import int_option
-from .staging import StagedOutputs, TargetError, check_targets, output_stem
+from .requests import check_preset_names, int_option
+from .staging import StagedOutputs, TargetError, check_targets, output_stem, reading_back, writing
 
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"
 DEFAULT_PRESETS = tuple(ARTIST_PRESETS) + tuple(PAPER_PRESETS)
@@ -82,12 +83,7 @@ def settings_from_options(options: dict[str, Any]) -> LookdevSettings:
     o = {k: v for k, v in options.items() if v is not None}
     size = int_option("size", o.get("size", DEFAULT_SIZE), *SIZE_RANGE)
     samples = int_option("samples", o.get("samples", DEFAULT_SAMPLES), *SAMPLES_RANGE)
-    names = tuple(o.get("presets") or DEFAULT_PRESETS)
-    if len(set(names)) != len(names):
-        raise ParameterError("presets", list(names), "distinct preset names")
-    for name in names:
-        if name not in PRESETS:
-            raise ParameterError("presets", name, "preset names among " + ", ".join(PRESETS))
+    names = check_preset_names(o.get("presets") or DEFAULT_PRESETS)
     hdri = o.get("hdri")
     if hdri is not None and (not isinstance(hdri, str) or not hdri.strip() or "/" in hdri):
         raise ParameterError("hdri", hdri, "the name of one of Blender's bundled HDRIs (forest, courtyard, ...)")
@@ -125,7 +121,8 @@ def render_tiles(scene, layout: GalleryLayout, tiles: Sequence[tuple[str, Callab
                  bar=None) -> tuple[np.ndarray, list[float]]:
     """Render ``scene`` once per tile, after the tile's callable has set it up (put its material
     on the ball), into the linear grid of ``layout`` (the render boxes); returns the grid
-    (H, W, 3) and each tile's render seconds.  The EXRs go to a temporary folder."""
+    (H, W, 3) and each tile's render seconds.  The EXRs go to a temporary folder; one that
+    cannot be read back (that folder's disk is full) is a :class:`~.staging.WriteError`."""
     from ..blender import scene as S
 
     size = layout.size
@@ -141,7 +138,9 @@ def render_tiles(scene, layout: GalleryLayout, tiles: Sequence[tuple[str, Callab
             exr = Path(tmp_name) / f"{k}.exr"
             seconds.append(S.render_to_exr(exr, scene, guard))
             x0, y0, x1, y1 = layout.render_box(k)
-            sheet[y0:y1, x0:x1] = S.passes_from_exr(exr).beauty
+            with guard.io() if guard is not None else contextlib.nullcontext(), \
+                    reading_back(exr, tmp_name), muted_stderr():
+                sheet[y0:y1, x0:x1] = S.passes_from_exr(exr).beauty
             if bar is not None:
                 bar.update(1)
     return sheet, seconds
@@ -217,11 +216,11 @@ def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, pro
             "layered_brdf_version": __version__, "command": list(command) if command is not None else None,
         }
         with StagedOutputs([s.output, s.sidecar], guard) as staged:
-            with guard.io():
+            with guard.io(), writing(s.output):
                 save_png(staged.temp(s.output), pixels)
             guard.check()
             data["total_seconds"] = time.perf_counter() - t_start
-            with guard.io():
+            with guard.io(), writing(s.sidecar):
                 write_json(staged.temp(s.sidecar), data)
             guard.check()
     total = time.perf_counter() - t_start

@@ -9,9 +9,11 @@ gallery (:mod:`.gallery`) builds its grid scene and calls :func:`render_outputs`
 """
 from __future__ import annotations
 
+import contextlib
 import platform
 import socket
 import time
+from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
@@ -19,10 +21,10 @@ import numpy as np
 from .. import __version__
 from ..model.params import ParameterError
 from ..model.policy import plan_effects
-from .codecs import exr_beauty, replace_exr_layers, save_png, to_srgb8
+from .codecs import exr_beauty, muted_stderr, read_complete_exr_layers, replace_exr_layers, save_png, to_srgb8
 from .requests import RenderRequest
 from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dict, write_json
-from .staging import InterruptGuard, OutputPaths, StagedOutputs
+from .staging import InterruptGuard, OutputPaths, StagedOutputs, reading_back, writing
 
 PNG_ENCODING = "8-bit sRGB, Blender's Standard view transform (clipped to [0, 1])"
 
@@ -174,23 +176,41 @@ def render_outputs(scene, paths: OutputPaths, guard: InterruptGuard, *,
         exr_tmp = staged.temp(paths.exr)
         t_render = time.perf_counter()
         render_to_exr(exr_tmp, scene, guard)
-        if osl_aovs:
-            layers = _osl_aov_layers(scene, guard)
-            guard.check()
-            with guard.io():
-                replace_exr_layers(exr_tmp, layers)
         render_seconds = time.perf_counter() - t_render
         guard.check()
-        rgb, alpha = exr_beauty(exr_tmp)
+        rgb, alpha = read_written_beauty(exr_tmp, paths.exr, guard)
+        if osl_aovs:
+            t_aovs = time.perf_counter()
+            layers = _osl_aov_layers(scene, guard)
+            guard.check()
+            with guard.io(), writing(paths.exr):
+                replace_exr_layers(exr_tmp, layers)
+            render_seconds += time.perf_counter() - t_aovs
+            guard.check()
         pixels = png(rgb, alpha)
-        with guard.io():
+        with guard.io(), writing(paths.png):
             save_png(staged.temp(paths.png), pixels)
         guard.check()
         data = describe(render_seconds)
-        with guard.io():
+        with guard.io(), writing(paths.json):
             write_json(staged.temp(paths.json), data)
         guard.check()
     return data
+
+
+def read_written_beauty(exr: Path, final: Path, guard: InterruptGuard | None = None
+                        ) -> tuple[np.ndarray, np.ndarray | None]:
+    """The beauty pass of the EXR that Blender wrote to ``exr`` (the staged file of ``final``),
+    once every pass its header lists has been read.
+
+    A file cut short (Blender's writer is silent about a full disk) is a
+    :class:`~.staging.WriteError` naming ``final`` and saying why, rather than a missing
+    channel or an EXR committed without some of its passes; OpenEXR's own complaints
+    about the damaged chunks are not shown.
+    """
+    with guard.io() if guard is not None else contextlib.nullcontext(), \
+            reading_back(final, Path(exr).parent), muted_stderr():
+        return exr_beauty(exr, read_complete_exr_layers(exr))
 
 
 def execute_render(req: RenderRequest, command: Sequence[str] | None = None,

@@ -181,6 +181,48 @@ def check_plain(name: str, value: Any) -> Any:
     return value
 
 
+class FileValueError(ParameterError):
+    """An invalid value read from a file (a ``--params`` file, a job's ``params``): the
+    message names the file and the key, not a command-line option nobody typed."""
+
+    def __init__(self, name: str, value: Any, allowed: str, file: str):
+        super().__init__(name, value, allowed)
+        self.file = file
+        self.args = (f"parameter '{name}' = {value!r} in {file}: allowed {allowed}",)
+
+
+def file_label(path: Any) -> str:
+    """A file's path as the user gave it, for a message (a long one cut at the front)."""
+    text = os.fspath(path) if isinstance(path, (str, os.PathLike)) else repr(shown(path))
+    return text if len(text) <= 80 else "..." + text[-77:]
+
+
+def from_file(e: ParameterError, values: Mapping[str, Any], file: str,
+              overridden: Iterable[str] = ()) -> ParameterError:
+    """``e`` as a :class:`FileValueError` naming ``file`` when the value it names was read
+    from it (is one of ``values`` and not ``overridden`` by an option); else ``e``."""
+    if isinstance(e, FileValueError) or e.name not in values or e.name in set(overridden):
+        return e
+    return FileValueError(e.name, e.value, e.allowed, file)
+
+
+PRESETS_ALLOWED = "preset names among " + ", ".join(PRESETS)
+
+
+def check_preset_names(names: Sequence[Any]) -> tuple[str, ...]:
+    """The presets of ``--presets`` (``gallery``, ``lookdev``): distinct known names; else
+    :class:`ParameterError` naming ``presets``, the option as typed."""
+    names = list(names)
+    if not names or not all(isinstance(n, str) for n in names):
+        raise ParameterError("presets", shown(names), PRESETS_ALLOWED)
+    if len(set(names)) != len(names):
+        raise ParameterError("presets", shown(names), "distinct preset names")
+    for name in names:
+        if name not in PRESETS:
+            raise ParameterError("presets", shown(name), PRESETS_ALLOWED)
+    return tuple(names)
+
+
 def check_name(value: Any, name: str = "name") -> str:
     """A job or render name: used as a file name, so it is a name and not a path."""
     allowed = OPTION_ALLOWED["name"]
@@ -438,13 +480,16 @@ def read_table_file(path: str | os.PathLike, name: str, allowed: str) -> Any:
         raise ParameterError(name, str(p), f"{allowed} ({str(e)[:200]})") from None
 
 
-def load_params_file(path: str | os.PathLike) -> dict[str, Any]:
+def load_params_file(path: str | os.PathLike, label: str | None = None) -> dict[str, Any]:
     """Parameter values from a ``.json`` or ``.toml`` file.
 
     The file holds ``{name: value}``; a ``params`` table inside it is used instead
-    when present, so a render's sidecar can be given to re-render its material.
+    when present, so a render's sidecar can be given to re-render its material.  An
+    unknown key or an absurd value is a :class:`FileValueError` naming the file as
+    ``label`` (default: ``path``) and the key.
     """
     p = Path(path)
+    label = str(p) if label is None else label
     allowed = "a readable .json or .toml file of parameter values (a regular file of at most 1 MiB)"
     data = read_table_file(p, "params", allowed)
     if isinstance(data, dict) and isinstance(data.get("params"), dict):
@@ -453,8 +498,12 @@ def load_params_file(path: str | os.PathLike) -> dict[str, Any]:
         raise ParameterError("params", str(p), allowed + " (a table of name = value)")
     for key, value in data.items():
         if key not in PARAM_NAMES:
-            raise ParameterError(short_name(key), shown(value), "a known parameter name: " + ", ".join(PARAM_NAMES))
-        check_plain(key, value)
+            raise FileValueError(short_name(key), shown(value), "a known parameter name: " + ", ".join(PARAM_NAMES),
+                                 label)
+        try:
+            check_plain(key, value)
+        except ParameterError as e:
+            raise from_file(e, data, label) from None
     return data
 
 
@@ -544,7 +593,8 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
     With ``confine`` the outputs must stay inside ``output_dir`` (a batch's jobs).  No
     output may replace the params file, the .blend or one of ``extra_inputs``.  Every
     output target is checked (:func:`check_output`).  Raises :class:`ParameterError`
-    naming the first invalid option.
+    naming the first invalid option, or a :class:`FileValueError` naming the params
+    file and the key when the invalid value was read from that file.
     """
     opts = {k: v for k, v in options.items() if v is not None}
     for key in opts:
@@ -561,17 +611,28 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
     if preset_name is not None and (not isinstance(preset_name, str) or preset_name not in PRESETS):
         raise ParameterError("preset", shown(preset_name), "one of " + ", ".join(sorted(PRESETS)))
     params = preset(preset_name) if preset_name else LayeredParams()
-    params_file = None
+    params_file, file_values, label = None, {}, ""
     if "params" in opts:
         params_file = _resolve(opts["params"], base, "params").absolute()
-        params = LayeredParams.from_dict(load_params_file(params_file), base=params)
+        label = file_label(opts["params"])
+        file_values = load_params_file(params_file, label)
+        try:
+            params = LayeredParams.from_dict(file_values, base=params)
+        except ParameterError as e:
+            raise from_file(e, file_values, label) from None
     overrides = {k: opts[k] for k in PARAM_NAMES if k in opts}
     if overrides:
-        params = LayeredParams.from_dict(overrides, base=params)
+        try:
+            params = LayeredParams.from_dict(overrides, base=params)
+        except ParameterError as e:
+            raise from_file(e, file_values, label, overridden=overrides) from None
         overrides = {k: getattr(params, k) for k in overrides}
 
     backend = opts.get("backend", "nodes")
-    policy.check_backend(backend, params.lobe)
+    try:
+        policy.check_backend(backend, params.lobe)
+    except ParameterError as e:
+        raise from_file(e, file_values, label, overridden=overrides) from None
 
     blend = obj = None
     if "blend" in opts:

@@ -16,7 +16,7 @@ import stat
 import threading
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Iterator
 
 OUTPUT_SUFFIXES = (".png", ".exr", ".json")
 _TEMP_MARK = ".tmp"
@@ -78,6 +78,105 @@ def longest_temp_name(final: Path) -> str:
 
 class TargetError(ValueError):
     """An output file that could not be written where it is asked for."""
+
+
+FULL_DISK_ERRNOS = frozenset(n for n in (errno.ENOSPC, getattr(errno, "EDQUOT", None)) if n is not None)
+PROBE_BYTES = 1 << 16  # what a probe write puts on disk: more than a full disk's last partial block
+
+
+class WriteError(Exception):
+    """An output file that could not be written while a render wrote it (a full disk, a
+    failing device): the file, by its final name, and the reason, for a one-line message."""
+
+    def __init__(self, path: str | os.PathLike, reason: str):
+        self.path = Path(path)
+        self.reason = reason
+        super().__init__(f"could not write {self.path}: {reason}")
+
+
+def os_reason(e: OSError) -> str:
+    """The OS's reason for a failed write, for people: a full disk (or quota) is called so."""
+    text = e.strerror or str(e)
+    if e.errno == errno.ENOSPC:
+        return f"the disk is full ({text})"
+    if e.errno in FULL_DISK_ERRNOS:
+        return f"the disk quota is used up ({text})"
+    return text
+
+
+def write_probe(folder: str | os.PathLike, size: int = PROBE_BYTES) -> None:
+    """Write ``size`` bytes to a new probe file in ``folder``, flush them to disk and remove
+    the file; OSError (ENOSPC on a full disk) when the folder cannot take them now."""
+    probe = Path(folder) / f"..layered-brdf-probe-{os.getpid()}-{threading.get_ident() % 100000}.tmp"
+    fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o600)
+    try:
+        data = memoryview(bytes(size))
+        while data:
+            data = data[os.write(fd, data):]
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+        with contextlib.suppress(OSError):
+            os.unlink(probe)
+
+
+def unwritable_reason(folder: str | os.PathLike) -> str | None:
+    """Why ``folder`` takes no file now (the OS's reason of a failed probe write), or None."""
+    try:
+        write_probe(folder)
+    except OSError as e:
+        return os_reason(e)
+    return None
+
+
+def write_error(e: OSError) -> WriteError:
+    """An OSError of a write as a :class:`WriteError` naming the file it gives."""
+    return WriteError(e.filename if e.filename is not None else "a file", os_reason(e))
+
+
+@contextlib.contextmanager
+def writing(final: str | os.PathLike, folder: str | os.PathLike | None = None) -> Iterator[None]:
+    """Report a failed write of the output ``final`` as a :class:`WriteError` naming it.
+
+    An OSError carries its own reason.  Other writers say a full disk their own way
+    (OpenEXR with a RuntimeError): any other error is a failed write when a probe write
+    in ``folder`` (default: ``final``'s) fails too, and is raised unchanged otherwise.
+    """
+    folder = Path(final).parent if folder is None else folder
+    try:
+        yield
+    except WriteError:
+        raise
+    except OSError as e:
+        raise WriteError(final, os_reason(e)) from None
+    except Exception:
+        reason = unwritable_reason(folder)
+        if reason is None:
+            raise
+        raise WriteError(final, reason) from None
+
+
+def _what_went_wrong(e: BaseException) -> str:
+    text = e.args[0] if len(e.args) == 1 and isinstance(e.args[0], str) else str(e)
+    return f"{e.__class__.__name__}: {text}" if text else e.__class__.__name__
+
+
+@contextlib.contextmanager
+def reading_back(final: str | os.PathLike, folder: str | os.PathLike) -> Iterator[None]:
+    """Read back a file that Blender wrote in ``folder`` for ``final``.
+
+    Blender's image writer reports no failed write: on a full disk it leaves a file cut
+    short under the name it was given.  So a file that cannot be read back was not
+    written: a :class:`WriteError` naming ``final``, with the OS's reason when a probe
+    write in ``folder`` fails too (a full disk), else with what the reader said.
+    """
+    try:
+        yield
+    except WriteError:
+        raise
+    except Exception as e:
+        reason = unwritable_reason(folder) or f"the file Blender wrote cannot be read back ({_what_went_wrong(e)})"
+        raise WriteError(final, reason) from None
 
 
 def _probe(folder: Path, name_length: int) -> None:
