@@ -263,3 +263,17 @@ def test_a_jobs_params_file_is_named_and_a_job_files_output_is_no_option(tmp_pat
     err = _refused(["batch", "same.json", "--jobs", "0"], capsys)
     assert "parameter 'jobs'" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["jobs.json", "m.json", "same.json"]
+
+
+def test_a_params_file_and_typed_options_are_checked_as_one_set(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "params.json").write_text(json.dumps({"d_min": 300, "lower_medium": "custom", "r2_r": 1.7}))
+    req = request_from_options({"params": "params.json", "d_max": 400, "output": "x"})
+    assert (req.params.d_min, req.params.d_max, req.params.r2_r) == (300, 400, 1.7)
+    water = request_from_options({"lower_medium": "water", "output": "x"}).params
+    typed = request_from_options({"params": "params.json", "lower_medium": "water", "d_max": 400,
+                                  "output": "x"}).params
+    assert (typed.r2_r, typed.k2_g) == (water.r2_r, water.k2_g) and typed.d_min == 300
+    kept = request_from_options({"params": "params.json", "lower_medium": "water", "r2_r": 1.2, "d_max": 400,
+                                 "output": "x"}).params
+    assert kept.r2_r == 1.2

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from ..model import policy
-from ..model.params import PARAM_SPECS, LayeredParams, ParameterError
+from ..model.params import LOWER_MEDIA, LOWER_MEDIUM_KEYS, PARAM_SPECS, LayeredParams, ParameterError
 from ..model.presets import PRESETS, preset
 from .staging import OutputPaths, TargetError, check_targets, output_stem
 
@@ -204,6 +204,23 @@ def from_file(e: ParameterError, values: Mapping[str, Any], file: str,
     if isinstance(e, FileValueError) or e.name not in values or e.name in set(overridden):
         return e
     return FileValueError(e.name, e.value, e.allowed, file)
+
+
+def merged_values(file_values: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:
+    """A params file's values with the typed options over them, validated as one set.
+
+    Checked together, a file's ``d_min = 300`` and a typed ``--d-max 400`` make a valid
+    range (checked one after the other, the file's value would meet the default ``d_max``).
+    A lower medium typed as an option fills its n and k over the file's (as it would over
+    a preset's), unless they are typed too.
+    """
+    values = dict(file_values)
+    medium = overrides.get("lower_medium")
+    if isinstance(medium, str) and medium in LOWER_MEDIA and medium != "custom":
+        for key in LOWER_MEDIUM_KEYS:
+            values.pop(key, None)
+    values.update(overrides)
+    return values
 
 
 PRESETS_ALLOWED = "preset names among " + ", ".join(PRESETS)
@@ -616,14 +633,10 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
         params_file = _resolve(opts["params"], base, "params").absolute()
         label = file_label(opts["params"])
         file_values = load_params_file(params_file, label)
-        try:
-            params = LayeredParams.from_dict(file_values, base=params)
-        except ParameterError as e:
-            raise from_file(e, file_values, label) from None
     overrides = {k: opts[k] for k in PARAM_NAMES if k in opts}
-    if overrides:
+    if file_values or overrides:
         try:
-            params = LayeredParams.from_dict(overrides, base=params)
+            params = LayeredParams.from_dict(merged_values(file_values, overrides), base=params)
         except ParameterError as e:
             raise from_file(e, file_values, label, overridden=overrides) from None
         overrides = {k: getattr(params, k) for k in overrides}

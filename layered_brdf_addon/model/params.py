@@ -105,6 +105,8 @@ BASE_LAYERS = ("none", "transparent", "metal")
 OPTICS_MODES = ("paper", "physical")
 # "custom", then the named media of the measured table (model/data/media.json).
 LOWER_MEDIA = ("custom",) + media_names()
+# The parameters a named lower medium fills: its n and k at R, G, B.
+LOWER_MEDIUM_KEYS = ("r2_r", "r2_g", "r2_b", "k2_r", "k2_g", "k2_b")
 ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
 
 # The node group's colour socket of the base colour (base_r, base_g, base_b), and its tooltip.
