@@ -413,7 +413,7 @@ def test_sweep_removes_only_folders_of_dead_processes(tmp_path):
     gone = tmp_path / f"layered_brdf_aov_{dead.pid}_abc123"
     gone.mkdir()
     (gone / "render.exr").write_bytes(b"x")
-    other = tmp_path / "layered_brdf_preview_1_x"  # not an owned kind: never touched
+    other = tmp_path / "layered_brdf_preview_1_x"  # process 1 is alive: kept
     other.mkdir()
     stranger = tmp_path / "blender_abc"
     stranger.mkdir()

@@ -13,26 +13,58 @@
 It runs in the current session without saving it (``bpy.data.libraries.write``), so it
 works inside an artist's file: the materials it makes for the library are removed again,
 and the file's own data is as it was.  Files are written under temporary names in the
-folder and renamed when complete.  A ``.blend`` of the library's name that the library did
-not write (recorded with its SHA-256 in ``.layered_brdf_library.json``) is never replaced.
+folder (``.layered_brdf_partial_PID_*``) and put in place together: a failure puts the
+previous library back, and a later build removes the temporary files of a build whose
+process is gone.  A ``.blend`` of the library's name that the library did not write
+(recorded with its SHA-256 in ``.layered_brdf_library.json``) is never replaced.
 
 From a shell (or ``make assets``)::
 
     python -m layered_brdf_addon.blender.asset_library DIR [--presets NAME ...] [--user-presets]
         [--preview-size PX] [--samples N] [--hdri NAME]
+
+There, as for ``render`` and ``lookdev``, SIGINT and SIGTERM end the build with exit code
+130 and leave the library folder as it was (:class:`~layered_brdf_addon.cli.staging.InterruptGuard`),
+and Blender's temporary files live in the process's own temp folder (:mod:`.tempdirs`).
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
+import re
 import secrets
+import shutil
 import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import bpy
+from ..cli.staging import InterruptGuard
+from . import tempdirs
+
+INTERRUPTED = "interrupted; the library folder was left as it was before this build"
+
+
+def _start_command_line() -> InterruptGuard:
+    """The command line's interrupt guard and temp folder, set up before Blender is loaded.
+
+    From here on SIGINT and SIGTERM end the build with exit code 130 at any moment (Blender
+    would otherwise swallow Ctrl-C during a preview render and go on), and Blender's session
+    folder (``blender_*``) and the previews' folder are made in this process's own
+    ``layered_brdf_run_PID_*``, which the interrupt's clean-up removes (and, after a kill, the
+    next run's sweep).
+    """
+    guard = InterruptGuard(INTERRUPTED).arm()
+    guard.add_cleanup(tempdirs.remove_process_tempdir)
+    tempdirs.enter_process_tempdir()
+    return guard
+
+
+_command_line_guard = _start_command_line() if __name__ == "__main__" else None
+
+import bpy  # noqa: E402  (after the command line's temp folder: Blender makes its session folder when loaded)
 
 from ..model.params import ParameterError
 from ..model.policy import plan_effects
@@ -58,6 +90,11 @@ VERSION 1
 
 """
 _TEMP_PREFIX = ".layered_brdf_partial_"
+_PREVIOUS_MARK = ".previous"  # the earlier version of a library file, kept while the new one is put in place
+# A build's temporary files: .layered_brdf_partial_PID_TOKEN[.previous]SUFFIX, and the file Blender writes
+# first when it saves a .blend (that name and '@').
+_PARTIAL = re.compile(re.escape(_TEMP_PREFIX) + r"(\d+)_[0-9a-f]{12}(" + re.escape(_PREVIOUS_MARK)
+                      + r")?(\.blend|\.cats\.txt|\.json)@?")
 
 
 @dataclass
@@ -203,10 +240,16 @@ def catalog_text(existing: str | None) -> str:
 
 
 # --- writing ------------------------------------------------------------------------------------
+def _partial_name(directory: Path, suffix: str) -> Path:
+    """A temporary name in ``directory`` carrying this process's id, so that a later build can
+    tell the files of a build that died from those of one still running."""
+    return directory / f"{_TEMP_PREFIX}{os.getpid()}_{secrets.token_hex(6)}{suffix}"
+
+
 def _temp_path(directory: Path, suffix: str) -> Path:
     """A new empty file in ``directory`` under a temporary name (permissions as the umask gives)."""
     while True:
-        path = directory / f"{_TEMP_PREFIX}{secrets.token_hex(6)}{suffix}"
+        path = _partial_name(directory, suffix)
         try:
             with open(path, "x"):
                 return path
@@ -214,16 +257,161 @@ def _temp_path(directory: Path, suffix: str) -> Path:
             continue
 
 
-def _write_text(directory: Path, text: str, suffix: str) -> Path:
-    tmp = _temp_path(directory, suffix)
-    tmp.write_text(text, encoding="utf-8")
-    return tmp
+def stale_partials(directory) -> list[Path]:
+    """The temporary files in ``directory`` of builds whose process no longer runs (killed while
+    writing, a crash): regular files named as a build names them, never anything else."""
+    try:
+        entries = list(Path(directory).iterdir())
+    except OSError:
+        return []
+    out = []
+    for p in entries:
+        m = _PARTIAL.fullmatch(p.name)
+        if m is None or p.is_symlink() or not p.is_file():
+            continue
+        pid = int(m.group(1))
+        if pid != os.getpid() and not tempdirs.pid_running(pid):
+            out.append(p)
+    return sorted(out)
+
+
+def remove_stale_partials(directory) -> list[Path]:
+    """Remove :func:`stale_partials`; returns what was removed (errors are ignored)."""
+    removed = []
+    for p in stale_partials(directory):
+        with contextlib.suppress(OSError):
+            p.unlink()
+            removed.append(p)
+    return removed
 
 
 def _manifest_text(hashes: list[str], names: dict[str, str]) -> str:
     return json.dumps({"format": MANIFEST_FORMAT, "version": MANIFEST_VERSION, "files": {LIBRARY_FILE: hashes},
                        "assets": names, "catalogs": {c.uuid: c.path for c in all_catalogs()}},
                       indent=2, sort_keys=True) + "\n"
+
+
+class _Staging:
+    """The build's own files in the library folder while it writes: its temporary files, and the
+    folder itself when the build made it.
+
+    Each temporary file is registered as it is created, before anything is written to it, so a
+    failed write (a full disk) leaves nothing: :meth:`discard` removes them all after a failure,
+    and from the interrupt guard's clean-up when a signal ends the process.  Every step holds
+    the guard's I/O lock, so that clean-up never finds a file half made or half renamed.
+    """
+
+    def __init__(self, directory: Path, guard: InterruptGuard | None = None):
+        self.directory = directory
+        self.guard = guard
+        self.files: list[Path] = []
+        self.made_folder = False
+
+    def io(self):
+        """The guard's I/O lock (nothing without a guard): held while files are made or renamed."""
+        return self.guard.io() if self.guard is not None else contextlib.nullcontext()
+
+    def check(self) -> None:
+        """KeyboardInterrupt when the guard has received a signal."""
+        if self.guard is not None:
+            self.guard.check()
+
+    def make_folder(self) -> None:
+        with self.io():
+            if not self.directory.exists():
+                self.directory.mkdir()
+                self.made_folder = True
+
+    def new(self, suffix: str) -> Path:
+        """A new empty temporary file, registered for removal."""
+        with self.io():
+            path = _temp_path(self.directory, suffix)
+            self.files.append(path)
+        return path
+
+    def text(self, text: str, suffix: str) -> Path:
+        """A new temporary file holding ``text``."""
+        with self.io():
+            path = self.new(suffix)
+            path.write_text(text, encoding="utf-8")
+        return path
+
+    def keep_previous(self, final: Path, suffix: str) -> Path | None:
+        """A second name for the library file ``final`` (a hard link; a copy where the file system
+        has none) while the new one is put in place; None when there is no such file."""
+        if not os.path.lexists(final):
+            return None
+        with self.io():
+            while True:
+                backup = _partial_name(self.directory, _PREVIOUS_MARK + suffix)
+                try:
+                    os.link(final, backup, follow_symlinks=False)
+                except FileExistsError:
+                    continue
+                except OSError:
+                    shutil.copy2(final, backup, follow_symlinks=False)
+                return backup
+
+    def discard(self, folder: bool = True) -> None:
+        """Remove the temporary files (and Blender's own temporary file of each) and, with
+        ``folder``, the folder when this build made it and it is empty."""
+        with self.io():
+            for path in self.files:
+                for p in (path, path.with_name(path.name + "@")):
+                    with contextlib.suppress(OSError):
+                        p.unlink()
+            if folder and self.made_folder:
+                with contextlib.suppress(OSError):
+                    self.directory.rmdir()
+
+
+def _commit(staged: _Staging, blend_tmp: Path, cats_tmp: Path, old_hashes: list[str], new_hash: str,
+            names: dict[str, str]) -> None:
+    """Put the new library in place, all of it or nothing.
+
+    The record is placed first accepting both the old and the new .blend, so that a process
+    killed between the renames leaves a library the next build still recognises as its own;
+    the files it replaces are kept under second names until the last rename.  Any failure, and
+    an interrupt received meanwhile (the guard waits for the lock), puts the previous files
+    back (or removes the new ones where there were none) before the exception goes on.
+    """
+    directory = staged.directory
+    manifest, blend, cats = directory / MANIFEST_FILE, directory / LIBRARY_FILE, directory / CATALOG_FILE
+    with staged.io():
+        staged.check()
+        pending = staged.text(_manifest_text(old_hashes + [new_hash], names), ".json")
+        final = staged.text(_manifest_text([new_hash], names), ".json")
+        previous: dict[Path, Path | None] = {}
+        placed: list[Path] = []
+        try:
+            for target, suffix in ((manifest, ".json"), (blend, ".blend"), (cats, ".cats.txt")):
+                previous[target] = staged.keep_previous(target, suffix)
+            for tmp, target in ((pending, manifest), (blend_tmp, blend), (cats_tmp, cats), (final, manifest)):
+                os.replace(tmp, target)
+                placed.append(target)
+            staged.check()
+        except BaseException:
+            _put_back(previous, placed)
+            raise
+        for backup in previous.values():
+            if backup is not None:
+                with contextlib.suppress(OSError):
+                    backup.unlink()
+
+
+def _put_back(previous: dict[Path, Path | None], placed: list[Path]) -> None:
+    """Undo a commit: each placed file gets its earlier version back (or is removed where it had
+    none); the second names of files not placed yet are dropped.  The record goes last."""
+    for target in sorted(previous, key=lambda p: p.name == MANIFEST_FILE):
+        backup = previous[target]
+        with contextlib.suppress(OSError):
+            if target not in placed:
+                if backup is not None:
+                    backup.unlink()
+            elif backup is not None:
+                os.replace(backup, target)
+            else:
+                target.unlink()
 
 
 class _Registered:
@@ -280,15 +468,19 @@ def _make_looks(names: dict[str, str], made: list, step) -> None:
 
 def write_asset_library(directory, presets=None, preview_size: int = assets.PREVIEW_SIZE,
                         samples: int = assets.PREVIEW_SAMPLES, hdri: str | None = None,
-                        progress=None) -> LibraryResult:
+                        progress=None, guard: InterruptGuard | None = None) -> LibraryResult:
     """Write the looks library into ``directory``: ``Layered BRDF Looks.blend`` (a material asset
     per preset of ``presets``, default :func:`default_presets`) and ``blender_assets.cats.txt``.
 
     ``preview_size`` is the previews' size in pixels (0: no previews), rendered with ``samples``
     per pixel under the bundled HDRI ``hdri``.  The folder is made when only it is missing.
     Re-running replaces the library's own files; a ``.blend`` of that name the library did not
-    write is never replaced (ParameterError naming ``directory``, nothing written).
-    ``progress(done, total)`` is called as looks are made and previews rendered.
+    write is never replaced, and a folder (or anything but a file) under one of the library's
+    file names is refused (ParameterError naming ``directory``, nothing made or written).
+    Temporary files left in the folder by a build whose process is gone are removed.
+    ``progress(done, total)`` is called as looks are made and previews rendered.  With an
+    interrupt ``guard`` (the command line's), a signal ends the process at once with the
+    folder as it was: the temporary files are removed and the previous library stays whole.
     """
     t0 = time.perf_counter()
     identifiers = _check_presets(presets)
@@ -303,13 +495,14 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
     path = _check_directory(directory)
     names = _unique_names(identifiers)
     _existing(path)  # refused now, before anything is made, when the folder holds files not ours
+    remove_stale_partials(path)
 
     result = LibraryResult(directory=path, blend=path / LIBRARY_FILE, catalogs=path / CATALOG_FILE, assets=names)
     before_groups = {g.as_pointer() for g in bpy.data.node_groups}
     before_texts = {t.as_pointer() for t in bpy.data.texts}
     renamed = []  # the file's own materials holding a look's name, renamed for the moment
     made = []
-    temps: list[Path] = []
+    staged = _Staging(path, guard)
     total = len(names) * (2 if preview_size else 1)
     count = [0]
 
@@ -318,7 +511,8 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
         if progress is not None:
             progress(count[0], total)
 
-    created_dir = False
+    if guard is not None:
+        guard.add_cleanup(staged.discard)
     try:
         with _Registered():
             for name in names:
@@ -328,35 +522,26 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
                     renamed.append((other, name))
             _make_looks(names, made, step)
             if preview_size:
-                result.preview_seconds = assets.render_previews(made, preview_size, samples, hdri, done=step)
-            if not path.exists():
-                path.mkdir()
-                created_dir = True
-            # Read again just before writing: the folder may have changed during the renders
-            # (say the catalogs were edited in Blender's Asset Browser).
-            old_hashes, cats = _existing(path)
-            blend_tmp = _temp_path(path, ".blend")
-            temps.append(blend_tmp)
-            bpy.data.libraries.write(str(blend_tmp), set(made), fake_user=True, compress=True)
-            new_hash = _sha256(blend_tmp)
-            temps.append(cats_tmp := _write_text(path, cats, ".cats.txt"))
-            # The record first accepts both the old and the new .blend, so that an interruption
-            # between the renames leaves a library the next run still recognises as its own.
-            temps.append(pending := _write_text(path, _manifest_text(old_hashes + [new_hash], names), ".json"))
-            os.replace(pending, path / MANIFEST_FILE)
-            os.replace(blend_tmp, result.blend)
-            os.replace(cats_tmp, result.catalogs)
-            temps.append(final := _write_text(path, _manifest_text([new_hash], names), ".json"))
-            os.replace(final, path / MANIFEST_FILE)
+                result.preview_seconds = assets.render_previews(made, preview_size, samples, hdri, done=step,
+                                                                guard=guard)
+            staged.check()
+            with staged.io():
+                staged.make_folder()
+                # Read again just before writing: the folder may have changed during the renders
+                # (say the catalogs were edited in Blender's Asset Browser).
+                old_hashes, cats = _existing(path)
+                blend_tmp = staged.new(".blend")
+                bpy.data.libraries.write(str(blend_tmp), set(made), fake_user=True, compress=True)
+                new_hash = _sha256(blend_tmp)
+                cats_tmp = staged.text(cats, ".cats.txt")
+                _commit(staged, blend_tmp, cats_tmp, old_hashes, new_hash, names)
     except BaseException:
-        if created_dir and not any(p for p in path.iterdir() if p not in temps):
-            for tmp in temps:
-                tmp.unlink(missing_ok=True)
-            path.rmdir()
+        staged.discard(folder=True)
         raise
     finally:
-        for tmp in temps:
-            tmp.unlink(missing_ok=True)
+        staged.discard(folder=False)
+        if guard is not None:
+            guard.remove_cleanup(staged.discard)
         try:
             _remove_made(made, before_groups, before_texts)
         finally:
@@ -366,12 +551,28 @@ def write_asset_library(directory, presets=None, preview_size: int = assets.PREV
     return result
 
 
+def _check_library_files(path: Path) -> None:
+    """ParameterError naming ``directory`` and the path when one of the library's file names in
+    the folder is taken by a folder or anything else that is not a file: found before anything
+    is rendered, rather than when the new files are put in place."""
+    for name in (LIBRARY_FILE, CATALOG_FILE, MANIFEST_FILE):
+        target = path / name
+        if target.is_dir():
+            raise ParameterError("directory", str(path), f"a folder whose {name} is a file ('{target}' is a "
+                                 "folder: move it or choose another folder)")
+        if target.exists() and not target.is_file():
+            raise ParameterError("directory", str(path), f"a folder whose {name} is a regular file ('{target}' "
+                                 "is a FIFO, a device or a socket: move it or choose another folder)")
+
+
 def _existing(path: Path) -> tuple[list[str], str]:
     """What the folder holds now: the hashes of a library .blend that may be replaced and the
-    catalog file to write (its other catalogs kept).  ParameterError naming ``directory`` when the
-    .blend there is not the library's or the catalog file is not one of VERSION 1."""
+    catalog file to write (its other catalogs kept).  ParameterError naming ``directory`` when one
+    of the library's file names is not a file, the .blend there is not the library's or the
+    catalog file is not one of VERSION 1."""
     if not path.exists():
         return [], catalog_text(None)
+    _check_library_files(path)
     old_hashes = _owned_hashes(path)
     cats = path / CATALOG_FILE
     if not cats.is_file():
@@ -454,20 +655,27 @@ def _print_progress(done: int, total: int) -> None:
 
 
 def main(argv=None) -> int:
-    """Exit codes: 0 written, 2 invalid input (the message names the parameter), 1 another failure."""
+    """Exit codes: 0 written, 2 invalid input (the message names the parameter), 1 another failure,
+    130 interrupted by SIGINT or SIGTERM (the library folder as it was before the build)."""
     args = _parser().parse_args(argv)
-    presets = args.presets or default_presets()
-    if args.user_presets:
-        presets = list(presets) + [user_presets.USER_PREFIX + n for n in user_presets.user_preset_names()]
-    try:
-        result = write_asset_library(args.directory, presets, preview_size=args.preview_size,
-                                     samples=args.samples, hdri=args.hdri, progress=_print_progress)
-    except ParameterError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    except (OSError, RuntimeError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 1
+    guard = _command_line_guard if _command_line_guard is not None else InterruptGuard(INTERRUPTED)
+    with guard:  # armed again: loading Blender may have replaced the handlers
+        presets = args.presets or default_presets()
+        if args.user_presets:
+            presets = list(presets) + [user_presets.USER_PREFIX + n for n in user_presets.user_preset_names()]
+        try:
+            result = write_asset_library(args.directory, presets, preview_size=args.preview_size,
+                                         samples=args.samples, hdri=args.hdri, progress=_print_progress,
+                                         guard=guard)
+        except ParameterError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            print(f"\n{INTERRUPTED}", file=sys.stderr)
+            return InterruptGuard.EXIT_CODE
+        except (OSError, RuntimeError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
     print(f"{len(result.assets)} looks in {result.blend}")
     print(f"catalogs in {result.catalogs}")
     if result.preview_seconds:

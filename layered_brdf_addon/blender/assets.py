@@ -16,7 +16,6 @@ data-block alone.
 from __future__ import annotations
 
 import os
-import tempfile
 import uuid
 from dataclasses import dataclass
 
@@ -28,7 +27,7 @@ from ..model.policy import plan_effects
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset, preset_label
 from ..backends import node_group as node_group_builder
 from . import material as M
-from . import user_presets
+from . import tempdirs, user_presets
 from .scene import render_to_file
 
 AUTHOR = "Layered BRDF add-on (Granier & Heidrich 2003 model)"
@@ -217,11 +216,16 @@ def _denoise(scene) -> None:
 
 
 def render_previews(materials, size: int | None = None, samples: int | None = None,
-                    hdri: str | None = None, done=None) -> list[float]:
+                    hdri: str | None = None, done=None, guard=None) -> list[float]:
     """Render each of ``materials`` on the look-development shader ball (under a bundled HDRI,
     transparent background, denoised) and write the pixels into its preview.  One scene serves them all
     and is removed afterwards.  ``done(material)`` is called after each.  Returns the seconds
-    each render took."""
+    each render took.
+
+    The renders go to a folder of the add-on's own (``layered_brdf_preview_PID_*``, swept when
+    its process died).  With an interrupt ``guard``
+    (:class:`~layered_brdf_addon.cli.staging.InterruptGuard`, the command line's), a signal
+    stops the renders at once and the folder is removed."""
     import time
 
     import numpy as np
@@ -243,15 +247,17 @@ def render_previews(materials, size: int | None = None, samples: int | None = No
         r.image_settings.color_mode = "RGBA"
         r.image_settings.color_depth = "8"
         slot = ball.material_slots[0]
-        with tempfile.TemporaryDirectory(prefix="layered_brdf_preview_") as tmp:
+        with tempdirs.owned_tempdir("preview", guard) as tmp:
             path = os.path.join(tmp, "preview.png")
             for mat in materials:
+                if guard is not None:
+                    guard.check()
                 slot.material = mat
                 node = M.shader_node(mat)
                 # The OSL backend's materials need Cycles' OSL shading (on the CPU, as the scene renders).
                 scene.cycles.shading_system = node is not None and node.bl_idname == "ShaderNodeScript"
                 t0 = time.perf_counter()
-                render_to_file(path, scene)
+                render_to_file(path, scene, guard)
                 image = bpy.data.images.load(path, check_existing=False)
                 try:
                     pixels = np.empty(size * size * 4, dtype=np.float32)

@@ -3,14 +3,16 @@ swept when their owner died without removing them (kill -9, a crash, a power cut
 
 Every folder is ``layered_brdf_KIND_PID_XXXXXXXX`` in the system temp folder (``TMPDIR``):
 ``osl`` (an OSL compile: Cycles writes its ``.osl``/``.oso`` files there), ``aov`` (the
-extra passes of an OSL render) and ``run`` (a command-line render's own temp folder:
-Blender's session folder ``blender_*`` and everything else the render writes goes under
-it).  :func:`sweep_stale` removes those whose PID no longer runs.  Nothing here imports bpy.
+extra passes of an OSL render), ``preview`` (the renders of asset previews) and ``run`` (a
+command-line render's or library build's own temp folder: Blender's session folder
+``blender_*`` and everything else the process writes goes under it).  :func:`sweep_stale`
+removes those whose PID no longer runs.  Nothing here imports bpy.
 """
 from __future__ import annotations
 
 import atexit
 import contextlib
+import functools
 import os
 import re
 import shutil
@@ -20,7 +22,7 @@ from pathlib import Path
 from typing import Iterator
 
 PREFIX = "layered_brdf_"
-KINDS = ("osl", "aov", "run")
+KINDS = ("osl", "aov", "run", "preview")
 _OWNED = re.compile(PREFIX + r"(" + "|".join(KINDS) + r")_(\d+)_[A-Za-z0-9_]+")
 TEMP_ENV = ("TMPDIR", "TEMP", "TMP")
 
@@ -94,15 +96,36 @@ def private_tempdir(kind: str) -> Iterator[Path]:
         shutil.rmtree(folder, ignore_errors=True)
 
 
+@contextlib.contextmanager
+def owned_tempdir(kind: str, guard=None) -> Iterator[Path]:
+    """A new owned folder for the block (stale folders of dead processes swept first), removed after it.
+
+    With an interrupt ``guard`` (:class:`~layered_brdf_addon.cli.staging.InterruptGuard`) the
+    folder is also removed by the guard's clean-up when a signal ends the process inside the
+    block; a process killed outright leaves it to the next sweep.
+    """
+    sweep_stale()
+    folder = owned_dir(kind)
+    remove = functools.partial(shutil.rmtree, folder, ignore_errors=True)
+    if guard is not None:
+        guard.add_cleanup(remove)
+    try:
+        yield folder
+    finally:
+        remove()
+        if guard is not None:
+            guard.remove_cleanup(remove)
+
+
 def enter_process_tempdir() -> Path | None:
     """Give this process its own temp folder, removed at exit; sweep stale ones first.
 
-    Call it before the first ``import bpy`` of a command-line render: Blender creates its
-    session folder (``blender_*``) in ``TMPDIR`` when it starts, so it and everything else
-    the render writes there ends up in ``layered_brdf_run_PID_*``, which goes away at exit,
-    in :func:`remove_process_tempdir` (an interrupt's clean-up) or, when the process was
-    killed, in the next run's sweep.  Where bpy is already loaded (the add-on in
-    Blender, tests), only sweeps.  Returns the folder (None where not made).
+    Call it before the first ``import bpy`` of a command-line render or library build:
+    Blender creates its session folder (``blender_*``) in ``TMPDIR`` when it starts, so it
+    and everything else the process writes there ends up in ``layered_brdf_run_PID_*``,
+    which goes away at exit, in :func:`remove_process_tempdir` (an interrupt's clean-up)
+    or, when the process was killed, in the next run's sweep.  Where bpy is already loaded
+    (the add-on in Blender, tests), only sweeps.  Returns the folder (None where not made).
     """
     global _process_dir
     sweep_stale()
