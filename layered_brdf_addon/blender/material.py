@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 
 import bpy
 
-from ..model.params import ParameterError, LayeredParams, group_socket_name, iter_sockets
+from ..model.params import LOWER_MEDIUM_KEYS, ParameterError, LayeredParams, group_socket_name, iter_sockets
 from ..model.plan import EffectPlan
-from ..model import policy
+from ..model import ops_numpy, policy
 from ..model.policy import plan_effects
 from ..model.base_layers import base_node
 from . import osl as osl_backend
@@ -28,41 +29,160 @@ SUBGROUP_KEY = "layered_brdf_stamp"  # on the sub-groups the node groups use
 _OSL_TEXT = re.compile(r"layered_brdf_.*\.osl")
 
 
+class DataBlockError(ParameterError):
+    """An object or material that cannot take the layered material, said in its own words
+    ("object 'Empty' (EMPTY) has no material slots: ..."): a ParameterError, so the panel, the
+    operators and the command line treat it as invalid input; ``name`` is ``"object"`` or
+    ``"material"``, ``value`` the data block's name."""
+
+    def __init__(self, kind: str, data_block, allowed: str, message: str):
+        super().__init__(kind, data_block.name, allowed)
+        self.args = (message,)
+
+
+class _Shown:
+    """A value of the wrong type as a message shows it: its type, never a long repr."""
+
+    def __init__(self, value):
+        self.text = f"<{type(value).__name__}>"
+
+    def __repr__(self) -> str:
+        return self.text
+
+
+def _shown(value):
+    """``value`` itself when its repr is short (None, a number), else :class:`_Shown`."""
+    return value if value is None or isinstance(value, (bool, int, float)) else _Shown(value)
+
+
+# The object types that render a material's surface shader. Grease Pencil objects take Grease
+# Pencil materials, not shader node materials; a volume renders only a material's Volume output.
+SURFACE_OBJECTS = frozenset({"MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD"})
+SURFACE_KINDS = "a mesh, curve, surface, metaball, text, hair curves or point cloud object"
+_GREASE_PENCIL = ("GREASEPENCIL", "GPENCIL")
+
+
+def takes_layered_material(obj) -> bool:
+    """Whether ``obj`` is of a type that renders the layered material (a mesh, curve, text...)."""
+    return obj is not None and obj.type in SURFACE_OBJECTS and hasattr(obj.data, "materials")
+
+
+def _kind_problem(obj) -> str | None:
+    """Why an object of ``obj``'s type cannot carry the layered material, or None."""
+    if takes_layered_material(obj):
+        return None
+    head = f"object '{obj.name}' ({obj.type})"
+    if obj.type in _GREASE_PENCIL:
+        return f"{head} is a Grease Pencil object: its materials are Grease Pencil materials, " \
+               f"not shader node materials; choose {SURFACE_KINDS}"
+    if obj.type == "VOLUME":
+        return f"{head} renders only a material's Volume output, not a surface shader; choose {SURFACE_KINDS}"
+    return f"{head} has no material slots: choose {SURFACE_KINDS}"
+
+
+def _linked_problem(obj, index: int | None = None) -> str | None:
+    """Why a material cannot be written into ``obj``'s slot ``index`` (None: the active slot, or a
+    new one when it has none), or None: edits to linked data are not saved (reopening the file
+    reads the library again), so a linked object, and a slot (or a new slot) of linked object data,
+    are refused; a library override's own slot (a slot linked to the Object) and an overridden
+    mesh's existing slot keep the edit."""
+    if obj.library is not None:
+        return f"object '{obj.name}' is linked from {obj.library.filepath}: make it local first " \
+               "(edits to linked data are not saved)"
+    data = obj.data
+    slots = obj.material_slots
+    if slots and slots[obj.active_material_index if index is None else index].link == "OBJECT":
+        return None
+    if data.library is not None:
+        where = "the slot is linked to the data" if slots else "a new slot would go in the data"
+        return f"object '{obj.name}': its data '{data.name}' is linked from {data.library.filepath} " \
+               f"and {where}; make the data local first, or link the slot to the Object " \
+               "(edits to linked data are not saved)"
+    if not slots and data.override_library is not None:
+        return f"object '{obj.name}': its data '{data.name}' is a library override, which cannot keep " \
+               "a new material slot; add the slot in the library, or make the data local first"
+    return None
+
+
+def object_problem(obj) -> str | None:
+    """Why ``obj`` cannot be given the layered material now, or None."""
+    return _kind_problem(obj) or _linked_problem(obj)
+
+
+def _check_object(obj) -> None:
+    """Raise DataBlockError unless ``obj`` is a local object of a type that renders the material."""
+    problem = _kind_problem(obj)
+    if problem is not None:
+        raise DataBlockError("object", obj, SURFACE_KINDS, problem)
+    if obj.library is not None:
+        raise DataBlockError("object", obj, "a local object", _linked_problem(obj))
+
+
+def _check_local_material(mat) -> None:
+    if mat.library is not None:
+        raise DataBlockError("material", mat, "a local material",
+                             f"material '{mat.name}' is linked from {mat.library.filepath}: make it local first "
+                             "(edits to linked data are not saved)")
+
+
+def _object_argument(value, argument: str):
+    """The object ``value`` names (an object or its name), or ParameterError naming ``argument``."""
+    if isinstance(value, bpy.types.Object):
+        return value
+    if isinstance(value, str):
+        obj = bpy.data.objects.get(value)
+        if obj is None:
+            raise ParameterError(argument, value, "the name of an object in the file: "
+                                 + ", ".join(sorted(o.name for o in bpy.data.objects))[:400])
+        return obj
+    raise ParameterError(argument, _shown(value), "an object (bpy.types.Object) or its name"
+                         + (", or a material" if argument == "target" else ""))
+
+
+def _params_argument(params) -> LayeredParams:
+    """``params`` as validated parameters: a LayeredParams, a mapping of parameter values (checked
+    by the parameter table, unknown names refused) or None for the defaults."""
+    if params is None:
+        return LayeredParams().validate()
+    if isinstance(params, LayeredParams):
+        return params.validate()
+    if isinstance(params, Mapping):
+        return LayeredParams.from_dict(dict(params))
+    raise ParameterError("params", _shown(params), "a LayeredParams, a dict of parameter values or None")
+
+
 def _material_for(target, name):
     if isinstance(target, bpy.types.Material):
-        if target.library is not None:
-            raise ParameterError("target", target.name, "a local material (it is linked from "
-                                 f"{target.library.filepath}); make it local first")
+        _check_local_material(target)
         return target
-    obj = target
-    if isinstance(target, str):
-        obj = bpy.data.objects.get(target)
-        if obj is None:
-            raise ParameterError("target", target, "the name of an object in the file: "
-                                 + ", ".join(sorted(o.name for o in bpy.data.objects))[:400])
-    if not hasattr(obj, "data") or not hasattr(obj.data, "materials"):
-        raise ParameterError("target", obj.name, "an object that can hold materials (mesh, curve, ...)")
+    obj = _object_argument(target, "target")
+    _check_object(obj)
     mat = None
     if obj.active_material is not None and obj.active_material.get(MATERIAL_KEY):
         mat = obj.active_material
     if mat is not None and mat.library is not None:
-        raise ParameterError("target", obj.name, "an object whose material is local (it is linked from "
-                             f"{mat.library.filepath}); make it local first")
-    if mat is None:
-        mat = bpy.data.materials.new(name)
-        mat[MATERIAL_KEY] = True
-        mat.node_tree.nodes.clear()  # a new material's default Principled BSDF is not ours to keep
-        if obj.material_slots:
-            # The slot the object renders: the object's own when the slot is linked to the Object.
-            slot = obj.material_slots[obj.active_material_index]
-            displaced = slot.material
-            slot.material = mat
-            if displaced is not None:
-                mat[DISPLACED_KEY] = displaced  # an ID pointer: a user, so it is saved; Remove puts it back
-            mat[SLOT_KEY] = "replaced" if displaced is not None else "filled"
-        else:
-            obj.data.materials.append(mat)
-            mat[SLOT_KEY] = "added"
+        raise DataBlockError("object", obj, "an object whose material is local",
+                             f"object '{obj.name}': its material '{mat.name}' is linked from "
+                             f"{mat.library.filepath}: make it local first (edits to linked data are not saved)")
+    if mat is not None:
+        return mat
+    problem = _linked_problem(obj)
+    if problem is not None:
+        raise DataBlockError("object", obj, "an object whose slot can be saved", problem)
+    mat = bpy.data.materials.new(name)
+    mat[MATERIAL_KEY] = True
+    mat.node_tree.nodes.clear()  # a new material's default Principled BSDF is not ours to keep
+    if obj.material_slots:
+        # The slot the object renders: the object's own when the slot is linked to the Object.
+        slot = obj.material_slots[obj.active_material_index]
+        displaced = slot.material
+        slot.material = mat
+        if displaced is not None:
+            mat[DISPLACED_KEY] = displaced  # an ID pointer: a user, so it is saved; Remove puts it back
+        mat[SLOT_KEY] = "replaced" if displaced is not None else "filled"
+    else:
+        obj.data.materials.append(mat)
+        mat[SLOT_KEY] = "added"
     return mat
 
 
@@ -175,6 +295,8 @@ def param_socket(node, name: str):
     sock = node.inputs.get(spec.name)
     if sock is not None:
         return sock, None
+    if spec.component is not None and _has_channel_sockets(node):
+        return None, None  # an older node's "Base Color" is its tint, not this channel
     label = group_socket_name(spec)
     for candidate in (label, SOCKET_NAMES.get(label, "")):
         sock = node.inputs.get(candidate)
@@ -183,11 +305,52 @@ def param_socket(node, name: str):
     return None, None
 
 
+def _has_channel_sockets(node) -> bool:
+    """Whether ``node`` is an older node with one float socket per base colour channel."""
+    return any(node.inputs.get(c) is not None for c in BASE_CHANNELS)
+
+
 def _legacy_tint(node):
     """An older node's tint ("Base Color" multiplied its base_r, base_g, base_b), or None."""
-    if node.inputs.get("base_r") is None:
+    if not _has_channel_sockets(node):
         return None
     return _socket(node.inputs, "Base Color")
+
+
+def _built_by_this_version(node) -> bool:
+    """Whether ``node`` runs a node group this version of the add-on built (stamp and code)."""
+    return node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and \
+        node.node_tree.get(node_group_builder.STAMP_KEY) == node_group_builder.build_stamp()
+
+
+def missing_inputs(node) -> list[str]:
+    """The parameters the add-on's shader node should have an input for and has not (the artist
+    deleted or renamed a socket of its group).
+
+    A node of this version has one for every parameter.  A node an older version built may lack
+    the lower medium's (r2, k2, added with physical optics; it then has none of them, and an
+    upgrade gives them the material's values); every other parameter was in the first version."""
+    lower = [k for k in LOWER_MEDIUM_KEYS if param_socket(node, k)[0] is not None]
+    expected = [s.name for s in iter_sockets()
+                if s.name not in LOWER_MEDIUM_KEYS or lower or _built_by_this_version(node)]
+    return [name for name in expected if param_socket(node, name)[0] is None]
+
+
+def node_damage(node) -> str | None:
+    """What the add-on's shader node lacks (a parameter's input, its BSDF output), or None."""
+    lacks = [f"the input of '{n}' ({group_socket_name(LayeredParams.spec(n))})" for n in missing_inputs(node)]
+    if _socket(node.outputs, "BSDF") is None:
+        lacks.append("its BSDF output")
+    return ", ".join(lacks) or None
+
+
+def check_node(mat, node) -> None:
+    """Raise ParameterError naming what ``mat``'s shader node lacks: such a node is rebuilt only
+    when the material is applied again (a Rebuild, a preset), never behind the artist's back."""
+    damage = node_damage(node)
+    if damage is not None:
+        raise ParameterError("material", mat.name, f"a Layered BRDF node with every socket: its node "
+                             f"'{node.name}' lacks {damage}; Rebuild or load a preset to repair it")
 
 
 def set_inputs(node, params: LayeredParams) -> None:
@@ -195,7 +358,9 @@ def set_inputs(node, params: LayeredParams) -> None:
     for spec in iter_sockets():
         sock, channel = param_socket(node, spec.name)
         if sock is None:
-            raise RuntimeError(f"shader node lacks the input of '{spec.name}' ({group_socket_name(spec)})")
+            raise ParameterError("node", node.name, f"a Layered BRDF node with an input for every parameter: "
+                                 f"it lacks the input of '{spec.name}' ({group_socket_name(spec)}); Rebuild or "
+                                 "load a preset to repair it")
         value = float(getattr(params, spec.name))
         if channel is None:
             sock.default_value = value
@@ -222,10 +387,18 @@ def input_linked(node, name: str) -> bool:
     return sock is not None and sock.is_linked
 
 
+def as_rendered(spec, value: float) -> float:
+    """The value the shader renders for ``value`` in ``spec``'s socket: its input stage clamps to
+    the parameter's range, and a NaN is the lower bound (so +inf the upper bound, -inf the lower)."""
+    return float(ops_numpy.clamp_input(value, spec.min, spec.max))
+
+
 def read_inputs(node, base: LayeredParams | None = None) -> LayeredParams:
-    """Parameters from the shader node's sockets (enums from the material's stored settings); a
-    parameter newer than the node (a file saved before it existed) keeps ``base``'s value."""
-    values = {spec.name: input_value(node, spec.name) for spec in iter_sockets()
+    """Parameters from the shader node's sockets (enums from the material's stored settings), each
+    as the shader renders it (:func:`as_rendered`: a NaN, an infinity or a value out of range, in a
+    file of any version, reads as the bound the shader uses); a parameter newer than the node (a
+    file saved before it existed) keeps ``base``'s value."""
+    values = {spec.name: as_rendered(spec, input_value(node, spec.name)) for spec in iter_sockets()
               if param_socket(node, spec.name)[0] is not None}
     return LayeredParams.from_dict(values, base=base or LayeredParams())
 
@@ -275,7 +448,7 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
         location = tuple(old.location)
         old_inputs = [sock.name for sock in old.inputs]
         stashed = _stash_animation(mat, old.name)
-        legacy_base = _legacy_base_links(old)
+        legacy_base = _legacy_base_links(old, params)
         if legacy_base is not None:
             handled = {*BASE_CHANNELS, _legacy_tint(old).name}
             keep_in = [(src, sock_name) for src, sock_name in keep_in if sock_name not in handled]
@@ -286,7 +459,7 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
         out = tree.nodes.new("ShaderNodeOutputMaterial")
         out.location = (400, 0)
     if backend == "nodes":
-        group = node_group_builder.ensure_group(plan)
+        group = _group_for(plan)
         node = tree.nodes.new("ShaderNodeGroup")
         node.node_tree = group
     else:
@@ -341,19 +514,22 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
     return node
 
 
-def _legacy_base_links(old):
+def _legacy_base_links(old, params: LayeredParams):
     """An older node whose base colour channels or tint are linked: ``(channels, tint)``, each a
-    linked output socket or the socket's value; None when nothing there is linked (then the
-    values carry over through :func:`read_inputs`)."""
+    linked output socket or the socket's value (a channel whose socket is gone: its value in
+    ``params``); None when nothing there is linked (then the values carry over through
+    :func:`read_inputs`)."""
     tint = _legacy_tint(old)
     if tint is None:
         return None
-    socks = [old.inputs[c] for c in BASE_CHANNELS]
-    if not tint.is_linked and not any(sock.is_linked for sock in socks):
+    socks = [old.inputs.get(c) for c in BASE_CHANNELS]
+    if not tint.is_linked and not any(sock is not None and sock.is_linked for sock in socks):
         return None
     source = lambda sock: sock.links[0].from_socket if sock.is_linked else tuple(sock.default_value) \
         if sock.type == "RGBA" else float(sock.default_value)
-    return [source(sock) for sock in socks], source(tint)
+    channels = [source(sock) if sock is not None else float(getattr(params, c))
+                for sock, c in zip(socks, BASE_CHANNELS)]
+    return channels, source(tint)
 
 
 def _link_legacy_base(tree, node, channels, tint) -> None:
@@ -599,13 +775,20 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
                            plan: EffectPlan | None = None, name: str = "Layered BRDF"):
     """Give ``target`` (an object, its name, or a material) the layered material.
 
+    ``params``: a LayeredParams, a dict of parameter values (validated like a preset file) or
+    None (the defaults).  A wrong type, an object of a type that renders no surface shader (an
+    Empty, a Grease Pencil object...) or linked data raises ParameterError, with nothing changed.
     Idempotent: applying again reuses the material and the node group, rebuilds the
     material's tree only when the backend or the plan of active effects changed, and
     otherwise only writes the parameter values into the shader's input sockets.
     ``plan`` defaults to :func:`plan_effects` of ``params`` (``EffectPlan.full()`` gives
     the always-full shader).  Returns the material.
     """
-    params = (params or LayeredParams()).validate()
+    params = _params_argument(params)
+    if plan is not None and not isinstance(plan, EffectPlan):
+        raise ParameterError("plan", _shown(plan), "an EffectPlan or None (the plan of the parameters)")
+    if not isinstance(name, str) or not name:
+        raise ParameterError("name", name if isinstance(name, str) else _shown(name), "a material name (text)")
     policy.check_backend(backend, params.lobe)
     mat = _material_for(target, name)
     plan = plan or plan_effects(params, animated_parameters(mat))
@@ -639,7 +822,28 @@ def _set_base_inputs(node, params: LayeredParams) -> None:
                 base.inputs[name].default_value = value
 
 
+def _group_lacks_sockets(group) -> bool:
+    """Whether the add-on's node group lacks a socket it builds for a parameter, or its BSDF output."""
+    items = [i for i in group.interface.items_tree if i.item_type == "SOCKET"]
+    inputs = {i.name for i in items if i.in_out == "INPUT"}
+    outputs = {i.name for i in items if i.in_out == "OUTPUT"}
+    return "BSDF" not in outputs or any(group_socket_name(s) not in inputs for s in iter_sockets())
+
+
+def _group_for(plan: EffectPlan):
+    """The node group for ``plan`` (:func:`node_group_builder.ensure_group`). A group stamped as
+    current that lacks a socket (the artist deleted one) is marked stale first, so it is rebuilt,
+    or set aside while other materials still use it (each is repaired when applied again)."""
+    group = node_group_builder.ensure_group(plan)
+    if _group_lacks_sockets(group):
+        del group[node_group_builder.PLAN_KEY]
+        group = node_group_builder.ensure_group(plan)
+    return group
+
+
 def _node_current(node, backend, plan) -> bool:
+    if node_damage(node) is not None:
+        return False
     if backend == "nodes":
         return node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and \
             node_group_builder.is_current(node.node_tree, plan)
@@ -654,14 +858,21 @@ def displaced_material(mat):
 
 
 def remove_layered_material(obj) -> bool:
-    """Remove the add-on's material from ``obj``'s active slot (else its first layered slot) and
-    put back the material it replaced there; True when one was removed."""
+    """Remove the add-on's material from ``obj`` (an object or its name): from its active slot,
+    else its first layered slot, and put back the material it replaced there; True when one was
+    removed.  A linked object is refused (the edit would not be saved)."""
+    obj = _object_argument(obj, "obj")
+    if obj.library is not None:
+        raise DataBlockError("object", obj, "a local object", _linked_problem(obj))
     slots = list(obj.material_slots)
     order = [obj.active_material_index] + list(range(len(slots))) if slots else []
     i = next((i for i in order if i < len(slots) and slots[i].material is not None
               and slots[i].material.get(MATERIAL_KEY)), None)
     if i is None:
         return False
+    problem = _linked_problem(obj, i)
+    if problem is not None:
+        raise DataBlockError("object", obj, "an object whose slot can be saved", problem)
     slot = slots[i]
     mat = slot.material
     displaced = displaced_material(mat)

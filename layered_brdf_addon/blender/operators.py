@@ -11,11 +11,14 @@ from bpy.types import Operator
 
 from ..model.params import ParameterError
 from . import asset_library, assets, osl, properties, user_presets
+from . import material as M
 
 
 def _object_with_materials(context):
+    """The active object when it is of a type that renders the layered material (not an Empty, a
+    light, a Grease Pencil object...), else None."""
     obj = context.object
-    return obj if obj is not None and hasattr(obj.data, "materials") else None
+    return obj if M.takes_layered_material(obj) else None
 
 
 def _layered_material(context):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from contextlib import contextmanager
 
 import bpy
@@ -143,14 +144,32 @@ def settings(mat):
 LEGACY_DEFAULTS = {"accuracy": "rgb"}
 
 
+def stored_enums(mat) -> dict:
+    """The settings ``mat`` was last built with (the record apply_layered_material writes), the
+    valid entries only: a record that is not a mapping, or an entry that is not one of its
+    setting's options, is read as absent (the setting keeps its own value)."""
+    stored = mat.get(ENUMS_KEY)
+    record = stored.to_dict() if hasattr(stored, "to_dict") else stored
+    if not isinstance(record, dict):
+        return {}
+    specs = {s.name: s for s in setting_specs()}
+    valid = {}
+    for name, value in record.items():
+        if name in specs:
+            try:
+                valid[name] = specs[name].check(value)
+            except (ParameterError, TypeError):
+                continue
+    return valid
+
+
 def _legacy_values(mat) -> dict:
     """The values of :data:`LEGACY_DEFAULTS` settings that ``mat`` (built by the add-on) never
     wrote: what it was built with (its stamped enums), else the old default."""
     st = settings(mat)
     if mat.get(BUILD_KEY) is None:
         return {}
-    stored = mat.get(ENUMS_KEY)
-    enums = dict(stored.to_dict()) if stored is not None else {}
+    enums = stored_enums(mat)
     return {name: enums.get(name, old) for name, old in LEGACY_DEFAULTS.items() if not st.is_property_set(name)}
 
 
@@ -179,8 +198,12 @@ def check_backend(params: LayeredParams, backend: str) -> None:
 
 
 def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
-    """What the material should be built as: (parameters, backend, plan); ParameterError if it can't be."""
+    """What the material should be built as: (parameters, backend, plan); ParameterError if it can't be
+    (also when its shader node lacks a socket: only applying it again repairs that)."""
     _check_local(mat)
+    node = M.shader_node(mat)
+    if node is not None:
+        M.check_node(mat, node)
     params = params_of(mat)
     backend = settings(mat).backend
     check_backend(params, backend)
@@ -246,10 +269,9 @@ def adopt(mat, keep: str | None = None) -> None:
                 setattr(st, name, value)
     if st.adopted:
         return
-    stored = mat.get(ENUMS_KEY)
-    values = dict(stored.to_dict()) if stored is not None else {}
+    values = stored_enums(mat)
     backend = mat.get(BACKEND_KEY)
-    if backend is not None:
+    if backend in tuple(b for b, _, _ in BACKEND_ITEMS):
         values["backend"] = backend
     with suspended_updates():
         for s in setting_specs():
@@ -322,16 +344,23 @@ def _editable_layered_materials():
     return [m for m in bpy.data.materials if _editable(m)]
 
 
+def sync_on_its_own(mat, check_sources: bool = False) -> bool:
+    """:func:`sync_material` for a handler or a pass over many materials: a material that can't be
+    built (ParameterError) is left as it is, and the panel says why; one whose rebuild fails is
+    left too, with one line on stderr.  Either way the next material is still done."""
+    try:
+        return sync_material(mat, check_sources=check_sources)
+    except ParameterError:
+        return False
+    except Exception as e:  # a broken material must not stop the others, nor a handler
+        print(f"Layered BRDF: material '{mat.name}' left as it is: {e.__class__.__name__}: {e}", file=sys.stderr)
+        return False
+
+
 def upgrade_all() -> list[str]:
-    """Rebuild the local layered materials whose node group or OSL text is out of date."""
-    done = []
-    for mat in _editable_layered_materials():
-        try:
-            if sync_material(mat, check_sources=True):
-                done.append(mat.name)
-        except ParameterError:
-            continue  # left as saved; the panel shows the reason
-    return done
+    """Rebuild the local layered materials whose node group or OSL text is out of date, each on
+    its own (one that can't be leaves the others to be done); the names of those rebuilt."""
+    return [mat.name for mat in _editable_layered_materials() if sync_on_its_own(mat, check_sources=True)]
 
 
 # --- handlers ----------------------------------------------------------------------------
@@ -341,12 +370,8 @@ def on_depsgraph_update(scene, depsgraph):
         return
     updated = [u.id.original for u in depsgraph.updates if isinstance(u.id, bpy.types.Material)]
     for mat in updated:
-        if not _editable(mat):
-            continue
-        try:
-            sync_material(mat)
-        except ParameterError:
-            continue  # left as it is; the panel shows the reason
+        if _editable(mat):
+            sync_on_its_own(mat)
 
 
 @persistent

@@ -27,6 +27,9 @@ def draw_param(layout, mat, node, spec) -> None:
     text = properties.param_label(spec)
     if spec.socket:
         sock, channel = M.param_socket(node, spec.name)
+        if sock is None:  # a socket deleted from the node group, or a node older than the parameter
+            row.label(text=f"{text}: not on the node (Rebuild adds it)", icon="ERROR")
+            return
         if channel is not None:  # a channel of a colour socket: the colour is drawn once, as a colour
             if channel != 0:
                 return
@@ -50,12 +53,18 @@ def _alert(layout, text, icon="ERROR"):
 def draw_material(layout, context) -> None:
     obj = context.object
     mat = obj.active_material
+    if obj.library is not None:
+        _alert(layout, M.object_problem(obj), icon="LIBRARY_DATA_DIRECT")
+        return
     if mat is not None and mat.library is not None:
         _alert(layout, f"'{mat.name}' is linked from {mat.library.filepath}: make it local to edit it",
                icon="LIBRARY_DATA_DIRECT")
         if properties.is_layered(mat):
             return
     if not properties.is_layered(mat):
+        problem = M.object_problem(obj)  # a slot of linked data: applying would not be saved
+        if problem:
+            _alert(layout, problem, icon="LIBRARY_DATA_DIRECT")
         layout.operator("layered_brdf.apply", icon="SHADING_RENDERED")
         layout.menu(LAYERED_BRDF_MT_presets.__name__, text="Apply a Preset", icon="PRESET")
         draw_asset_row(layout, None)
@@ -112,8 +121,7 @@ class LAYERED_BRDF_PT_material(Panel):
 
     @classmethod
     def poll(cls, context):
-        obj = context.object
-        return obj is not None and hasattr(obj.data, "materials")
+        return M.takes_layered_material(context.object)
 
     def draw(self, context):
         draw_material(self.layout, context)
@@ -129,7 +137,7 @@ class _ParamsPanel(Panel):
     @classmethod
     def poll(cls, context):
         obj = context.object
-        mat = properties.layered_material_of(obj) if obj is not None and hasattr(obj.data, "materials") else None
+        mat = properties.layered_material_of(obj) if M.takes_layered_material(obj) else None
         return mat is not None and mat.library is None and M.shader_node(mat) is not None
 
     def draw(self, context):

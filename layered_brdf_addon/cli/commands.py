@@ -351,7 +351,7 @@ def _hint(e: ParameterError, options: Collection[str]) -> str:
     if isinstance(e, FileValueError) or e.name not in options:
         return ""
     if any(s.name == e.name for s in PARAM_SPECS) or e.name in ("sun_strength", "output", "resolution", "size",
-                                                                  "samples", "presets", "hdri", "columns"):
+                                                                  "samples", "presets", "hdri", "columns", "object"):
         return f" (option --{e.name.replace('_', '-')})"
     return ""
 
