@@ -9,21 +9,17 @@ measured ``n(lambda)``, ``k(lambda)``, seen under D65 (:mod:`.thin_film`).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from layered_brdf_addon.model import ops_numpy as O
-from layered_brdf_addon.model import program
+from layered_brdf_addon.fit.mirror import UNIT_LOBE_EXPONENT, mirror_reflectance
 from layered_brdf_addon.model.media import layer_index_values, spectrum
-from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
-from layered_brdf_addon.model.policy import plan_effects
+from layered_brdf_addon.model.params import LayeredParams
 
 from . import thin_film as tf
 
 OUTSIDE_INDEX = 1.0  # air above the film
-UNIT_LOBE_EXPONENT = 2.0 * math.pi - 2.0  # (e + 2) / (2 pi) = 1
 ANGLES_DEG = (0.0, 30.0, 60.0)
 ACCURACIES = ("analytic", "rgb")
 OPTICS = ("physical", "paper")
@@ -67,26 +63,10 @@ def film_params(film: str, below: str, thickness_nm, optics: str = "physical",
 
 def model_film_rgb(film: str, below: str, thickness_nm, theta_deg: float, optics: str = "physical",
                    accuracy: str = "analytic") -> np.ndarray:
-    """The model's reflectance of the smooth film, linear Rec.709, one row per thickness:
-    ``(AR + r1^2 AT + r1 AI) / cos_v`` of the program's amplitudes at the mirror direction
-    (``AT`` carries the in-layer lobe's ``1 / r1^2``, ``AI`` the square root of both)."""
+    """The model's reflectance of the smooth film, linear Rec.709, one row per thickness
+    (:func:`layered_brdf_addon.fit.mirror.mirror_reflectance`)."""
     p = film_params(film, below, thickness_nm, optics, accuracy)
-    plan = plan_effects(p)
-    d = np.atleast_1d(np.asarray(thickness_nm, dtype=float))
-    cos_v = np.full(d.shape, math.cos(math.radians(theta_deg)))
-    one = np.ones(d.shape)
-    r1 = O.triple(*p.r1)
-    e = UNIT_LOBE_EXPONENT
-    lobes = (cos_v, cos_v, one, one, one)  # cos_ls, cos_ci, tail, through, atten: the mirror direction
-    modes = dict(interference=plan.interference, band=plan.analytic, dispersion=plan.dispersion, footprint=False)
-    lam = O.triple(*WAVELENGTHS_NM)
-    if optics == "physical":
-        AR, AT, AI = program.film_amplitudes(O, r1, lam, e, e, p.ks, p.r0, O.triple(*p.r2), O.triple(*p.k2), d,
-                                             cos_v, *lobes, orders=2 if plan.multibeam else 1, **modes)
-    else:
-        AR, AT, AI = program.lobe_amplitudes(O, r1, lam, e, e, p.ks, p.r0, d, cos_v, *lobes, **modes)
-    R = (AR + r1 * r1 * AT + r1 * AI) / cos_v
-    return np.broadcast_to(np.asarray(R, dtype=float), d.shape + (3,)).copy()
+    return mirror_reflectance(p, theta_deg, np.atleast_1d(np.asarray(thickness_nm, dtype=float)))
 
 
 def rgb_to_lab(rgb) -> np.ndarray:

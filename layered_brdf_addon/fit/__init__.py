@@ -1,0 +1,11 @@
+"""Fitting a layered material to a target: a render, a Principled BSDF material, a
+reflectance table (``layered-brdf fit``, the panel's *Fit to Render...*).
+
+The model fitted is the closure form, what the node group and the OSL shader render,
+evaluated by the numpy backend of the shading program: a target rendered by Cycles is
+matched by what Cycles will render from the fitted parameters.  A reflectance table is
+matched by the film's mirror reflection (the amplitude step of the same program).
+
+Needs SciPy (``scipy.optimize.least_squares``) and colour-science (CIELAB, CIEDE2000);
+imports no bpy.
+"""

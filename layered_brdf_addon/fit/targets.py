@@ -1,0 +1,191 @@
+"""What a fit matches: pixels of spheres under suns, or a reflectance table.
+
+A target holds observed colours and predicts them from parameters with the numpy backend
+of the shading program.  Both kinds give ``observed`` (N, 3) linear RGB and
+``predict(params)`` of the same shape, and ``white_y``, the luminance their colours are
+measured against (:mod:`.colour_space`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from ..model.params import LayeredParams
+from ..model.policy import plan_effects
+from ..model.sphere import OrthoCamera, Sun, lower_normal, sphere_geometry, thickness_field
+from . import colour_space
+from .cycles_closures import closure_shading
+
+
+class TargetError(ValueError):
+    """A target that cannot be fitted: says why."""
+
+
+@dataclass
+class SphereView:
+    """One image of spheres under one sun: the pixels of sphere ``sphere`` are fitted."""
+
+    image: np.ndarray  # (H, W, 3) linear RGB, row 0 at the top
+    camera: OrthoCamera
+    sun: Sun
+    centers: tuple = ((0.0, 0.0, 0.0),)
+    sphere: int = 0
+
+
+@dataclass
+class SphereTarget:
+    """Spheres seen by orthographic cameras under suns (renders of the reference scene).
+
+    ``pixels`` caps the pixels the optimiser looks at (every view together): the brightest
+    tenth of each view's sphere, where the highlight and its colours are, then an even
+    spread of the rest.
+    """
+
+    views: Sequence[SphereView]
+    pixels: int = 1500
+    _points: list = field(default_factory=list, repr=False)
+
+    def __post_init__(self):
+        if not self.views:
+            raise TargetError("no image to fit")
+        per_view = max(64, self.pixels // len(self.views))
+        self._points = [self._sample(v, per_view) for v in self.views]
+        obs = np.concatenate([p["observed"] for p in self._points])
+        if not np.all(np.isfinite(obs)):
+            raise TargetError("the target's pixels hold NaN or infinite values")
+        if float(colour_space.luminance(obs).max(initial=0.0)) <= 0.0:
+            raise TargetError("the target's sphere is black: there is nothing to fit")
+        self.observed = obs
+        self.white_y = colour_space.white_of(obs)
+
+    @staticmethod
+    def _sample(view: SphereView, count: int) -> dict:
+        geo = sphere_geometry(view.camera, view.centers)
+        img = np.asarray(view.image, dtype=float)
+        if img.shape[:2] != geo.mask.shape or img.ndim != 3 or img.shape[2] < 3:
+            raise TargetError(f"an image of {img.shape[:2]} pixels where the camera sees {geo.mask.shape}")
+        rows, cols = np.nonzero(geo.sphere == view.sphere)
+        if rows.size == 0:
+            raise TargetError(f"the camera sees no pixel of sphere {view.sphere}")
+        rgb = img[rows, cols, :3]
+        y = colour_space.luminance(rgb)
+        order = np.argsort(-y, kind="stable")
+        bright = order[: max(1, min(count // 2, rows.size // 10))]
+        rest = np.setdiff1d(np.arange(rows.size), bright)
+        step = max(1, rest.size // max(1, count - bright.size))
+        pick = np.sort(np.concatenate([bright, rest[::step][: count - bright.size]]))
+        r, c = rows[pick], cols[pick]
+        return {"view": view, "rows": r, "cols": c, "observed": rgb[pick], "n0": geo.n0[r, c],
+                "p_object": geo.p_object[r, c], "v": geo.view}
+
+    def predict(self, params: LayeredParams) -> np.ndarray:
+        return np.concatenate([self._predict_points(params, p) for p in self._points])
+
+    @staticmethod
+    def _predict_points(params: LayeredParams, pts: dict) -> np.ndarray:
+        plan = plan_effects(params)
+        field_ = thickness_field(params)
+        if field_ is None:
+            raise TargetError("a fit reproduces the thickness by height (thickness_mode 'height'); "
+                              "Blender's noise is not evaluated in numpy")
+        d = field_(pts["p_object"])
+        n1 = lower_normal(params, pts["n0"], pts["p_object"], d)
+        sun = pts["view"].sun
+        return sun.strength * closure_shading(params, pts["n0"], n1, d, sun.l, pts["v"], ng=pts["n0"], plan=plan)
+
+    def render(self, params: LayeredParams, view: int = 0) -> np.ndarray:
+        """The whole image of view ``view`` for ``params`` (the fitted sphere only)."""
+        v = self.views[view]
+        geo = sphere_geometry(v.camera, v.centers)
+        rows, cols = np.nonzero(geo.sphere == v.sphere)
+        pts = {"view": v, "n0": geo.n0[rows, cols], "p_object": geo.p_object[rows, cols], "v": geo.view}
+        out = np.zeros(geo.mask.shape + (3,))
+        out[rows, cols] = self._predict_points(params, pts)
+        return out
+
+    def mask(self, view: int = 0) -> np.ndarray:
+        v = self.views[view]
+        return sphere_geometry(v.camera, v.centers).sphere == v.sphere
+
+
+CHANNELS = {"r": 0, "g": 1, "b": 2, "red": 0, "green": 1, "blue": 2}
+MIN_WAVELENGTHS = 8
+
+
+@dataclass
+class ReflectanceTarget:
+    """A smooth film's mirror reflectance at angles of incidence, as linear RGB per angle.
+
+    Built by :meth:`from_rows` from a table of (angle in degrees, channel or wavelength,
+    reflectance): channels ``r``, ``g``, ``b`` give the colour directly; wavelengths (nm,
+    at least 8 spanning 380-700 nm per angle) are seen under D65 by the CIE 1931 observer.
+    The model's side is :func:`.mirror.mirror_reflectance` of a uniform film ``d_min`` thick.
+    """
+
+    angles: np.ndarray  # (A,) degrees
+    rgb: np.ndarray  # (A, 3) linear Rec.709 reflectance
+    uniform_film = True  # one thickness, d_min: the fit ties d_max to it
+
+    def __post_init__(self):
+        self.angles = np.asarray(self.angles, dtype=float)
+        self.observed = np.asarray(self.rgb, dtype=float)
+        self.white_y = 1.0
+
+    @classmethod
+    def from_rows(cls, rows: Sequence[tuple[float, object, float]]) -> "ReflectanceTarget":
+        """From (angle, channel or wavelength, reflectance) rows; :class:`TargetError` says
+        what is wrong with a table that cannot be fitted."""
+        if not rows:
+            raise TargetError("the reflectance table is empty")
+        by_angle: dict[float, dict] = {}
+        for i, (angle, where, value) in enumerate(rows, start=1):
+            angle, value = _number(angle, "angle", i), _number(value, "reflectance", i)
+            if not 0.0 <= angle < 90.0:
+                raise TargetError(f"row {i}: angle {angle:g} is outside [0, 90) degrees")
+            if not 0.0 <= value <= 1.0:
+                raise TargetError(f"row {i}: reflectance {value:g} is outside [0, 1]")
+            key = str(where).strip().lower()
+            slot = CHANNELS.get(key)
+            if slot is None:
+                slot = _number(where, "channel or wavelength", i)
+                if not 200.0 <= slot <= 2000.0:
+                    raise TargetError(f"row {i}: wavelength {slot:g} nm is outside [200, 2000] nm")
+            by_angle.setdefault(angle, {})[slot] = value
+        angles, rgb = [], []
+        for angle, values in sorted(by_angle.items()):
+            rgb.append(_colour_of(angle, values))
+            angles.append(angle)
+        return cls(np.array(angles), np.array(rgb))
+
+    def predict(self, params: LayeredParams) -> np.ndarray:
+        from .mirror import mirror_reflectance
+
+        return np.stack([mirror_reflectance(params, a) for a in self.angles])
+
+
+def _number(value, name: str, row: int) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise TargetError(f"row {row}: {name} {value!r} is not a number") from None
+    if not np.isfinite(x):
+        raise TargetError(f"row {row}: {name} is {value!r}, not a finite number")
+    return x
+
+
+def _colour_of(angle: float, values: dict) -> np.ndarray:
+    channels = [k for k in values if isinstance(k, int)]
+    lams = sorted(k for k in values if isinstance(k, float))
+    if channels and lams:
+        raise TargetError(f"angle {angle:g}: rows of channels and of wavelengths mixed")
+    if channels:
+        if sorted(channels) != [0, 1, 2]:
+            raise TargetError(f"angle {angle:g}: needs the channels r, g and b")
+        return np.array([values[0], values[1], values[2]])
+    lo, hi = colour_space.VISIBLE_NM
+    if len(lams) < MIN_WAVELENGTHS or lams[0] > lo or lams[-1] < hi:
+        raise TargetError(f"angle {angle:g}: {len(lams)} wavelengths from {lams[0]:g} to {lams[-1]:g} nm; "
+                          f"needs at least {MIN_WAVELENGTHS} spanning {lo:g}-{hi:g} nm")
+    return colour_space.spectrum_to_rgb(np.array(lams), np.array([values[k] for k in lams]))
