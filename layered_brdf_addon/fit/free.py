@@ -96,16 +96,19 @@ class FreeParameters:
         return lo, hi
 
     def vector(self, params: LayeredParams, margin: float = 0.0) -> np.ndarray:
-        """``x`` of ``params``, clipped into the bounds shrunk by ``margin`` of their width.
+        """``x`` of ``params`` clipped into the bounds; a value on a bound moved ``margin`` of
+        the bounds' width inside.
 
-        A start a little inside the bounds: at a bound the optimiser may see no slope at all
-        (a diffuse weight of 0 hides the base colour's, a black base the weight's).
+        At a bound the optimiser may see no slope at all (a diffuse weight of 0 hides the base
+        colour's, a black base the weight's).
         """
         lo, hi = self.bounds()
         x = np.array([math.log(max(getattr(params, n), 1e-3)) if self._log(n) else float(getattr(params, n))
                       for n in self.names])
+        x = np.clip(x, lo, hi)
         inset = margin * (hi - lo)
-        return np.clip(x, lo + inset, hi - inset)
+        x = np.where(x <= lo, lo + inset, x)
+        return np.where(x >= hi, hi - inset, x)
 
     def params(self, x: Sequence[float]) -> LayeredParams:
         """The parameters at ``x`` (the base's others); a thickness range given upside down is

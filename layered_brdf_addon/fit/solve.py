@@ -21,8 +21,10 @@ from .free import FreeParameters, check_vary, default_vary, film_vary, search_ra
 
 THICKNESS_SCAN_NM = (20.0, 3000.0)
 THICKNESS_SCAN_STEPS = 28
+SCAN_HALF_WIDTHS = (0.1, 0.4)  # relative half-widths of the range scanned, besides the start's
 LOSS_SCALE = 2.0  # CIELAB units where soft_l1 turns from quadratic to linear
 GOOD_ENOUGH = 0.5  # mean CIEDE2000 below which no further start is tried (about a just-noticeable difference)
+X_SCALE = 1.0
 START_MARGIN = 0.05  # a start this far inside the bounds (of their width)
 
 
@@ -45,13 +47,14 @@ class _Objective:
 
     def __init__(self, target, free: FreeParameters, progress, should_stop):
         self.target, self.free = target, free
-        self.lab_observed = colour_space.lab(target.observed, target.white_y)
+        self.observed = features_observed(target, free.base)
+        self.weights = feature_weights(target, free.base)[:, None]
+        self.colours = colour_rows(target, free.base)
         self.progress, self.should_stop = progress, should_stop
         self.evaluations = 0
 
-    def lab(self, params: LayeredParams) -> np.ndarray:
-        rgb = np.nan_to_num(self.target.predict(params), nan=0.0, posinf=1e6, neginf=0.0)
-        return colour_space.lab(np.maximum(rgb, 0.0), self.target.white_y)
+    def features(self, params: LayeredParams) -> np.ndarray:
+        return np.nan_to_num(model_features(self.target, params), nan=0.0, posinf=1e3, neginf=-1e3)
 
     def __call__(self, x) -> np.ndarray:
         if self.should_stop is not None and self.should_stop():
@@ -59,10 +62,41 @@ class _Objective:
         self.evaluations += 1
         if self.progress is not None:
             self.progress(self.evaluations)
-        return (self.lab(self.free.params(x)) - self.lab_observed).ravel()
+        return ((self.features(self.free.params(x)) - self.observed) * self.weights).ravel()
 
     def mean_delta_e(self, params: LayeredParams) -> float:
-        return float(np.mean(colour_space.delta_e_2000(self.lab(params), self.lab_observed)))
+        c = self.colours
+        return float(np.mean(colour_space.delta_e_2000(self.features(params)[c], self.observed[c])))
+
+
+def _lab(target, rgb) -> np.ndarray:
+    rgb = np.nan_to_num(np.asarray(rgb, dtype=float), nan=0.0, posinf=1e6, neginf=0.0)
+    return colour_space.lab(np.maximum(rgb, 0.0), target.white_y)
+
+
+def model_features(target, params: LayeredParams) -> np.ndarray:
+    """The target's comparison rows (CIELAB) for ``params``: its own ``features`` where it
+    has them (sphere targets: pixels, or statistics for a noise thickness), else the Lab of
+    its predicted colours."""
+    if hasattr(target, "features"):
+        return target.features(params)
+    return _lab(target, target.predict(params))
+
+
+def features_observed(target, params: LayeredParams) -> np.ndarray:
+    if hasattr(target, "observed_features"):
+        return target.observed_features(params)
+    return _lab(target, target.observed)
+
+
+def feature_weights(target, params: LayeredParams) -> np.ndarray:
+    if hasattr(target, "feature_weights"):
+        return target.feature_weights(params)
+    return np.ones(len(target.observed))
+
+
+def colour_rows(target, params: LayeredParams):
+    return target.colour_rows(params) if hasattr(target, "colour_rows") else slice(None)
 
 
 def _soft_l1(r: np.ndarray) -> float:
@@ -71,18 +105,21 @@ def _soft_l1(r: np.ndarray) -> float:
 
 
 def thickness_starts(objective: _Objective, start: LayeredParams, count: int) -> list[LayeredParams]:
-    """The start and the ``count`` best mean thicknesses of a coarse scan (local minima of the
-    loss along the scan, best first), the range's relative width kept."""
+    """The start and the ``count`` best thickness ranges of a coarse scan (local minima of the
+    loss along the mean thickness, best first), at the start's relative width and at
+    :data:`SCAN_HALF_WIDTHS`."""
     lo, hi = start.d_min, start.d_max
     mids = np.geomspace(*THICKNESS_SCAN_NM, THICKNESS_SCAN_STEPS)
     if getattr(objective.target, "uniform_film", False):
         candidates = [start.replace(d_min=m) for m in mids]
     else:
         half = min(max((hi - lo) / max(hi + lo, 1e-9), 0.0), 0.9)
-        candidates = [start.replace(d_min=m * (1 - half), d_max=m * (1 + half)) for m in mids]
+        halves = sorted({round(half, 3), *SCAN_HALF_WIDTHS})
+        candidates = [start.replace(d_min=m * (1 - h), d_max=m * (1 + h)) for h in halves for m in mids]
     losses = np.array([_soft_l1(objective(objective.free.vector(p, START_MARGIN))) for p in candidates])
-    minima = [i for i in range(len(mids))
-              if (i == 0 or losses[i] <= losses[i - 1]) and (i == len(mids) - 1 or losses[i] <= losses[i + 1])]
+    n = len(mids)
+    minima = [i for i in range(len(candidates))
+              if (i % n == 0 or losses[i] <= losses[i - 1]) and (i % n == n - 1 or losses[i] <= losses[i + 1])]
     minima.sort(key=lambda i: losses[i])
     return [start] + [candidates[i] for i in minima[:count]]
 
@@ -114,7 +151,7 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     best, best_cost, tried = None, np.inf, []
     for first in firsts:
         sol = least_squares(objective, free.vector(first, START_MARGIN), bounds=(lo, hi), loss="soft_l1", f_scale=LOSS_SCALE,
-                            x_scale="jac", diff_step=1e-3, max_nfev=steps_per_start)
+                            x_scale=X_SCALE, diff_step=1e-3, max_nfev=steps_per_start)
         params = free.params(sol.x)
         de = objective.mean_delta_e(params)
         tried.append((first.d_min, first.d_max, de))

@@ -19,6 +19,29 @@ from . import colour_space
 from .cycles_closures import closure_shading
 
 
+GROUP_BINS = 6  # pixels seen alike: sixths of the half-vector's angle and of the view's cosine
+
+# Where Blender's Noise Texture (scale 4, roughness 0.5) puts its value over a sphere, measured
+# from the thickness pass of renders with d from 0 to 1000 nm (42,520 pixels each): the 1st,
+# 5th, 10th, 25th, 50th, 75th, 90th, 95th and 99th percentiles, by the noise's detail.
+NOISE_PERCENTILES = (1, 5, 10, 25, 50, 75, 90, 95, 99)
+NOISE_QUANTILES = {0.0: (0.238, 0.290, 0.325, 0.393, 0.471, 0.560, 0.641, 0.687, 0.742),
+                   2.0: (0.320, 0.363, 0.387, 0.431, 0.485, 0.542, 0.593, 0.621, 0.667),
+                   8.0: (0.340, 0.379, 0.401, 0.440, 0.487, 0.537, 0.581, 0.606, 0.648)}
+NOISE_MEDIAN = 0.485
+NOISE_LEVELS = 7  # thickness levels a noise's colours are averaged over
+
+
+def noise_levels(detail: float) -> np.ndarray:
+    """The noise's value at the middle of ``NOISE_LEVELS`` equal slices of its distribution,
+    interpolated between the measured details."""
+    details = np.array(sorted(NOISE_QUANTILES))
+    table = np.array([NOISE_QUANTILES[k] for k in details])
+    q = np.array([np.interp(detail, details, table[:, i]) for i in range(table.shape[1])])
+    probs = (np.arange(NOISE_LEVELS) + 0.5) / NOISE_LEVELS * 100.0
+    return np.interp(probs, NOISE_PERCENTILES, q)
+
+
 class TargetError(ValueError):
     """A target that cannot be fitted: says why."""
 
@@ -46,6 +69,7 @@ class SphereTarget:
     views: Sequence[SphereView]
     pixels: int = 1500
     _points: list = field(default_factory=list, repr=False)
+    _group_of: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
         if not self.views:
@@ -81,19 +105,100 @@ class SphereTarget:
                 "p_object": geo.p_object[r, c], "v": geo.view}
 
     def predict(self, params: LayeredParams) -> np.ndarray:
+        """The sampled pixels' colours (for a noise thickness: at the pattern's median)."""
         return np.concatenate([self._predict_points(params, p) for p in self._points])
+
+    def matches_statistics(self, params: LayeredParams) -> bool:
+        """Whether ``params`` put the thickness in a noise pattern: numpy does not evaluate
+        Blender's noise, so the fit matches colour statistics of pixels seen alike instead
+        of pixels (the noise's range through its value distribution, not its pattern)."""
+        return plan_effects(params).thickness == "noise"
+
+    def features(self, params: LayeredParams) -> np.ndarray:
+        """What a fit compares, in CIELAB: every sampled pixel's colour, or for a noise
+        thickness, per group of pixels seen alike, the mean colour and its spread (rows of
+        means, then rows of standard deviations) over the group's pixels and the noise's
+        thickness levels (:func:`noise_levels`)."""
+        if not self.matches_statistics(params):
+            return colour_space.lab(self.predict(params), self.white_y)
+        lab = np.concatenate([self._levels_lab(params, p) for p in self._points])
+        return self._group_stats(lab, np.full(NOISE_LEVELS, 1.0 / NOISE_LEVELS))
+
+    def observed_features(self, params: LayeredParams) -> np.ndarray:
+        obs = colour_space.lab(self.observed, self.white_y)
+        if not self.matches_statistics(params):
+            return obs
+        return self._group_stats(obs[:, None, :], np.ones(1))
+
+    def feature_weights(self, params: LayeredParams) -> np.ndarray:
+        """Each pixel alike; a group's statistics by the square root of its pixels."""
+        if not self.matches_statistics(params):
+            return np.ones(len(self.observed))
+        w = np.sqrt(np.bincount(self._groups(), minlength=self._group_count()).astype(float))
+        return np.concatenate([w, w])
+
+    def colour_rows(self, params: LayeredParams) -> slice:
+        """The rows of :meth:`features` that are colours (a CIEDE2000 reads them)."""
+        return slice(None) if not self.matches_statistics(params) else slice(0, self._group_count())
+
+    def _levels_lab(self, params: LayeredParams, pts: dict) -> np.ndarray:
+        """(N, levels, 3): the pixels' colours at each of the noise's thickness levels."""
+        out = []
+        for u in noise_levels(params.noise_detail):
+            d = np.full(len(pts["n0"]), params.d_min + (params.d_max - params.d_min) * u)
+            out.append(colour_space.lab(self._shade(params, pts, d), self.white_y))
+        return np.stack(out, axis=1)
+
+    def _groups(self) -> np.ndarray:
+        """Each sampled pixel's group: its view, and the sixths of the angle between its
+        normal and the half-vector and of its view cosine."""
+        if self._group_of is None:
+            keys = []
+            for k, p in enumerate(self._points):
+                v, l = p["v"], p["view"].sun.l
+                h = (v + l) / max(float(np.linalg.norm(v + l)), 1e-12)
+                nh = np.clip(p["n0"] @ h, 0.0, 1.0)
+                nv = np.clip(p["n0"] @ v, 0.0, 1.0)
+                a = np.minimum((np.arccos(nh) / (np.pi / 2) * GROUP_BINS).astype(int), GROUP_BINS - 1)
+                b = np.minimum((nv * GROUP_BINS).astype(int), GROUP_BINS - 1)
+                keys.append((k * GROUP_BINS + a) * GROUP_BINS + b)
+            _, group = np.unique(np.concatenate(keys), return_inverse=True)
+            self._group_of = group.ravel()
+        return self._group_of
+
+    def _group_count(self) -> int:
+        return int(self._groups().max()) + 1
+
+    def _group_stats(self, lab: np.ndarray, level_weights: np.ndarray) -> np.ndarray:
+        """Per group: the mean of each Lab coordinate and its standard deviation, over the
+        group's pixels and (for the model) the thickness levels weighted by ``level_weights``."""
+        g, n = self._groups(), self._group_count()
+        w = np.broadcast_to(level_weights[None, :], lab.shape[:2])
+        total = np.bincount(g, weights=w.sum(axis=1), minlength=n)[:, None]
+
+        def moment(x):
+            return np.stack([np.bincount(g, weights=(w * x[..., c]).sum(axis=1), minlength=n)
+                             for c in range(3)], -1) / total
+
+        mean = moment(lab)
+        std = np.sqrt(np.maximum(moment(lab ** 2) - mean ** 2, 0.0))
+        return np.concatenate([mean, std])
 
     @staticmethod
     def _predict_points(params: LayeredParams, pts: dict) -> np.ndarray:
-        plan = plan_effects(params)
         field_ = thickness_field(params)
-        if field_ is None:
-            raise TargetError("a fit reproduces the thickness by height (thickness_mode 'height'); "
-                              "Blender's noise is not evaluated in numpy")
-        d = field_(pts["p_object"])
+        if field_ is None:  # a noise: its median thickness everywhere
+            d = np.full(len(pts["n0"]), params.d_min + (params.d_max - params.d_min) * NOISE_MEDIAN)
+        else:
+            d = field_(pts["p_object"])
+        return SphereTarget._shade(params, pts, d)
+
+    @staticmethod
+    def _shade(params: LayeredParams, pts: dict, d: np.ndarray) -> np.ndarray:
         n1 = lower_normal(params, pts["n0"], pts["p_object"], d)
         sun = pts["view"].sun
-        return sun.strength * closure_shading(params, pts["n0"], n1, d, sun.l, pts["v"], ng=pts["n0"], plan=plan)
+        return sun.strength * closure_shading(params, pts["n0"], n1, d, sun.l, pts["v"], ng=pts["n0"],
+                                              plan=plan_effects(params))
 
     def render(self, params: LayeredParams, view: int = 0) -> np.ndarray:
         """The whole image of view ``view`` for ``params`` (the fitted sphere only)."""
