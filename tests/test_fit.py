@@ -1,0 +1,174 @@
+"""The fitting core: round trips of parameter sets never in the presets, a reflectance
+table from thin-film optics (tmm), and tables that cannot be fitted."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from layered_brdf_addon.fit.cycles_closures import closure_shading
+from layered_brdf_addon.fit.free import FreeParameters, check_vary, default_vary, film_vary
+from layered_brdf_addon.fit.solve import FitCancelled, fit
+from layered_brdf_addon.fit.targets import ReflectanceTarget, SphereTarget, SphereView, TargetError, noise_levels
+from layered_brdf_addon.model.params import ParameterError
+from layered_brdf_addon.model.presets import preset
+from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
+
+CAMERA = OrthoCamera(width=96, height=96)
+SUNS = (Sun((0.64, -0.77, 0.0), 3.0), Sun((0.3, -0.8, 0.5), 3.0))
+ROUND_TRIP_DELTA_E = 1.0  # mean CIEDE2000 between the target and the fit's render
+
+
+def views_of(params, suns=SUNS[:1]):
+    return [SphereView(render_spheres(params, CAMERA, sun, shading=closure_shading)[0], CAMERA, sun)
+            for sun in suns]
+
+
+def image_delta_e(target: SphereTarget, params) -> float:
+    """Mean CIEDE2000 over every pixel of the sphere between the target's images and ``params``'s."""
+    from layered_brdf_addon.fit import colour_space
+
+    out = []
+    for k, view in enumerate(target.views):
+        m = target.mask(k)
+        a = colour_space.lab(view.image[m], target.white_y)
+        b = colour_space.lab(target.render(params, k)[m], target.white_y)
+        out.append(colour_space.delta_e_2000(a, b))
+    return float(np.mean(np.concatenate(out)))
+
+
+HELD_OUT = {
+    # physical films, thickness by height (numpy reproduces it), never a preset's values
+    "soap_thick_rough": (preset("soap_bubble").replace(d_min=800, d_max=1600, e0=300, e1=600), "soap_bubble"),
+    "titanium_blue": (preset("anodised_titanium").replace(
+        d_min=40, d_max=90, e0=400, e1=900, r1_r=2.3, r1_g=2.4, r1_b=2.5, thickness_mode="height"),
+        "anodised_titanium"),
+    "oil_milky": (preset("oil_slick").replace(d_min=200, d_max=450, kd=0.5, thickness_mode="height"), "oil_slick"),
+    # the paper's optics, a tilted dispersive layer
+    "paper_tilted": (preset("fig6_medium").replace(d_min=500, d_max=700, thickness_mode="height"), "fig4_tilted"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(HELD_OUT))
+def test_a_held_out_material_is_found_again(case):
+    truth, start = HELD_OUT[case]
+    target = SphereTarget(views_of(truth))
+    result = fit(target, preset(start).replace(thickness_mode=truth.thickness_mode))
+    assert result.mean_delta_e <= ROUND_TRIP_DELTA_E
+    assert image_delta_e(target, result.params) <= ROUND_TRIP_DELTA_E
+    assert set(result.vary) == set(default_vary(truth))
+
+
+def test_two_suns_pin_the_material_down():
+    truth = preset("soap_bubble").replace(d_min=300, d_max=700, e0=800, e1=1400, kd=0.2, base_r=0.3, base_g=0.1,
+                                          base_b=0.05, base_layer="none")
+    target = SphereTarget(views_of(truth, SUNS))
+    result = fit(target, preset("soap_bubble").replace(base_layer="none"))
+    assert image_delta_e(target, result.params) <= ROUND_TRIP_DELTA_E
+    for name in ("d_min", "d_max", "e0"):
+        assert getattr(result.params, name) == pytest.approx(getattr(truth, name), rel=0.05)
+
+
+def test_only_the_named_parameters_move():
+    truth = preset("oil_slick").replace(d_min=250, d_max=500, thickness_mode="height")
+    start = preset("oil_slick").replace(thickness_mode="height")
+    result = fit(SphereTarget(views_of(truth)), start, vary=["d_min", "d_max"], starts=1)
+    moved = {k for k, v in result.params.to_dict().items() if v != start.to_dict()[k]}
+    assert moved <= {"d_min", "d_max"}
+    assert result.mean_delta_e <= ROUND_TRIP_DELTA_E
+
+
+def test_a_cancelled_fit_stops():
+    truth = preset("oil_slick").replace(thickness_mode="height")
+    calls = []
+    with pytest.raises(FitCancelled):
+        fit(SphereTarget(views_of(truth)), truth, should_stop=lambda: len(calls) > 5, progress=calls.append)
+    assert len(calls) == 6
+
+
+def test_the_free_parameters_follow_the_modes_and_the_table():
+    assert "tilt" in default_vary(preset("fig4_tilted")) and "tilt" not in default_vary(preset("fig4_parallel"))
+    assert "r2_r" in default_vary(preset("soap_bubble").replace(lower_medium="custom"))
+    assert "r2_r" not in default_vary(preset("soap_bubble"))
+    assert film_vary(preset("anodised_titanium")) == ("r1_r", "r1_g", "r1_b", "d_min")
+    with pytest.raises(ParameterError, match="'vary'"):
+        check_vary(["d_min", "thickness_mode"])
+    with pytest.raises(ParameterError, match="'vary'"):
+        check_vary([])
+    start = preset("soap_bubble")
+    free = FreeParameters(default_vary(start), start)
+    lo, hi = free.bounds()
+    assert np.all(lo < hi)
+    x = free.vector(start)
+    x[free.names.index("d_min")], x[free.names.index("d_max")] = np.log(900.0), np.log(150.0)
+    flipped = free.params(x)
+    assert (flipped.d_min, flipped.d_max) == pytest.approx((150.0, 900.0))
+
+
+def test_noise_levels_follow_the_measured_distribution():
+    for detail in (0.0, 2.0, 5.0, 8.0, 15.0):
+        u = noise_levels(detail)
+        assert np.all(np.diff(u) > 0) and 0.2 < u[0] and u[-1] < 0.8
+        assert u[len(u) // 2] == pytest.approx(0.48, abs=0.02)
+
+
+# -- reflectance tables ----------------------------------------------------------------------
+tf = pytest.importorskip("layered_brdf_reference.thin_film")
+
+
+def tmm_rows(film: str, below: str, thickness: float, angles=(0.0, 30.0, 60.0)):
+    from layered_brdf_reference.film_colours import complex_index
+
+    lams = np.arange(380.0, 781.0, 10.0)
+    rows = []
+    for angle in angles:
+        r = tf.film_reflectance(1.0, complex_index(film, lams), complex_index(below, lams), thickness, angle, lams)
+        rows += [(angle, lam, float(x)) for lam, x in zip(lams, r)]
+    return rows
+
+
+@pytest.mark.parametrize("film, below, thickness, start", [("tio2_amorphous", "titanium", 120.0, "anodised_titanium"),
+                                                          ("water", "air", 420.0, "soap_bubble"),
+                                                          ("oil", "water", 300.0, "oil_slick")])
+def test_a_thin_film_optics_table_is_matched(film, below, thickness, start):
+    from layered_brdf_addon.model.media import layer_index_values
+
+    target = ReflectanceTarget.from_rows(tmm_rows(film, below, thickness))
+    result = fit(target, preset(start))
+    assert result.mean_delta_e <= 2.0
+    assert result.params.d_min == result.params.d_max
+    # Interference fixes the optical thickness n d, not n and d apart.
+    n_true = np.mean(list(layer_index_values(film).values()))
+    assert np.mean(result.params.r1) * result.params.d_min == pytest.approx(n_true * thickness, rel=0.1)
+
+
+@pytest.mark.parametrize("rows, said", [
+    ([], "empty"),
+    ([(0, 450, float("nan"))], "not a finite number"),
+    ([(0, "r", -0.1), (0, "g", 0.1), (0, "b", 0.1)], "outside [0, 1]"),
+    ([(0, "r", 0.1), (0, "g", 0.1)], "needs the channels r, g and b"),
+    ([(0, 450, 0.1), (0, 550, 0.1)], "needs at least 8"),
+    ([(95, "r", 0.1)], "outside [0, 90)"),
+    ([(0, "ultraviolet", 0.1)], "not a number"),
+    ([(0, "r", 0.1), (0, "g", 0.1), (0, "b", 0.1), (0, 500, 0.1)], "mixed"),
+])
+def test_a_table_that_cannot_be_fitted_says_why(rows, said):
+    with pytest.raises(TargetError, match=re_escape(said)):
+        ReflectanceTarget.from_rows(rows)
+
+
+def re_escape(text: str) -> str:
+    import re
+
+    return re.escape(text)
+
+
+def test_a_target_that_cannot_be_fitted_says_why():
+    view = views_of(preset("oil_slick").replace(thickness_mode="height"))[0]
+    with pytest.raises(TargetError, match="NaN"):
+        SphereTarget([SphereView(np.full_like(view.image, np.nan), CAMERA, view.sun)])
+    with pytest.raises(TargetError, match="black"):
+        SphereTarget([SphereView(np.zeros_like(view.image), CAMERA, view.sun)])
+    with pytest.raises(TargetError, match="pixels"):
+        SphereTarget([SphereView(view.image[:10], CAMERA, view.sun)])
+    with pytest.raises(TargetError, match="no image"):
+        SphereTarget([])
