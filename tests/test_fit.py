@@ -5,47 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from layered_brdf_addon.fit.cycles_closures import closure_shading
 from layered_brdf_addon.fit.free import FreeParameters, check_vary, default_vary, film_vary
 from layered_brdf_addon.fit.solve import FitCancelled, fit
 from layered_brdf_addon.fit.targets import ReflectanceTarget, SphereTarget, SphereView, TargetError, noise_levels
 from layered_brdf_addon.model.params import ParameterError
 from layered_brdf_addon.model.presets import preset
-from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
+from layered_brdf_reference.fit_cases import CAMERA, FILMS, SUNS, held_out, image_delta_e, tmm_rows, views_of
 
-CAMERA = OrthoCamera(width=96, height=96)
-SUNS = (Sun((0.64, -0.77, 0.0), 3.0), Sun((0.3, -0.8, 0.5), 3.0))
 ROUND_TRIP_DELTA_E = 1.0  # mean CIEDE2000 between the target and the fit's render
-
-
-def views_of(params, suns=SUNS[:1]):
-    return [SphereView(render_spheres(params, CAMERA, sun, shading=closure_shading)[0], CAMERA, sun)
-            for sun in suns]
-
-
-def image_delta_e(target: SphereTarget, params) -> float:
-    """Mean CIEDE2000 over every pixel of the sphere between the target's images and ``params``'s."""
-    from layered_brdf_addon.fit import colour_space
-
-    out = []
-    for k, view in enumerate(target.views):
-        m = target.mask(k)
-        a = colour_space.lab(view.image[m], target.white_y)
-        b = colour_space.lab(target.render(params, k)[m], target.white_y)
-        out.append(colour_space.delta_e_2000(a, b))
-    return float(np.mean(np.concatenate(out)))
-
-
-HELD_OUT = {
-    # physical films, thickness by height (numpy reproduces it), never a preset's values
-    "soap_thick_rough": (preset("soap_bubble").replace(d_min=800, d_max=1600, e0=300, e1=600), "soap_bubble"),
-    "titanium_blue": (preset("anodised_titanium").replace(
-        d_min=40, d_max=90, e0=400, e1=900, r1_r=2.3, r1_g=2.4, r1_b=2.5, thickness_mode="height"),
-        "anodised_titanium"),
-    "oil_milky": (preset("oil_slick").replace(d_min=200, d_max=450, kd=0.5, thickness_mode="height"), "oil_slick"),
-    # the paper's optics, a tilted dispersive layer
-    "paper_tilted": (preset("fig6_medium").replace(d_min=500, d_max=700, thickness_mode="height"), "fig4_tilted"),
-}
+HELD_OUT = held_out()
 
 
 @pytest.mark.parametrize("case", sorted(HELD_OUT))
@@ -112,23 +80,7 @@ def test_noise_levels_follow_the_measured_distribution():
 
 
 # -- reflectance tables ----------------------------------------------------------------------
-tf = pytest.importorskip("layered_brdf_reference.thin_film")
-
-
-def tmm_rows(film: str, below: str, thickness: float, angles=(0.0, 30.0, 60.0)):
-    from layered_brdf_reference.film_colours import complex_index
-
-    lams = np.arange(380.0, 781.0, 10.0)
-    rows = []
-    for angle in angles:
-        r = tf.film_reflectance(1.0, complex_index(film, lams), complex_index(below, lams), thickness, angle, lams)
-        rows += [(angle, lam, float(x)) for lam, x in zip(lams, r)]
-    return rows
-
-
-@pytest.mark.parametrize("film, below, thickness, start", [("tio2_amorphous", "titanium", 120.0, "anodised_titanium"),
-                                                          ("water", "air", 420.0, "soap_bubble"),
-                                                          ("oil", "water", 300.0, "oil_slick")])
+@pytest.mark.parametrize("film, below, thickness, start", FILMS)
 def test_a_thin_film_optics_table_is_matched(film, below, thickness, start):
     from layered_brdf_addon.model.media import layer_index_values
 
