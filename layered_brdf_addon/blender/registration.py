@@ -4,7 +4,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import PointerProperty
 
-from . import assets, operators, properties, ui
+from . import assets, fit_operator, operators, properties, ui
 
 CLASSES = (
     properties.LayeredBRDFSettings,
@@ -18,6 +18,7 @@ CLASSES = (
     operators.LAYERED_BRDF_OT_upgrade,
     operators.LAYERED_BRDF_OT_enable_osl,
     operators.LAYERED_BRDF_OT_param_info,
+    fit_operator.LAYERED_BRDF_OT_fit_to_render,
     ui.LAYERED_BRDF_MT_presets,
     ui.LAYERED_BRDF_MT_delete_presets,
     ui.LAYERED_BRDF_PT_material,

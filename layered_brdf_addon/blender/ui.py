@@ -68,6 +68,7 @@ def draw_material(layout, context) -> None:
         layout.operator("layered_brdf.apply", icon="SHADING_RENDERED")
         layout.menu(LAYERED_BRDF_MT_presets.__name__, text="Apply a Preset", icon="PRESET")
         draw_asset_row(layout, None)
+        draw_fit_row(layout)
         return
     st = properties.settings(mat)
     row = layout.row(align=True)
@@ -88,6 +89,7 @@ def draw_material(layout, context) -> None:
     row.operator("layered_brdf.apply", text="Rebuild", icon="FILE_REFRESH")
     row.operator("layered_brdf.remove", text="", icon="X")
     draw_asset_row(layout, mat)
+    draw_fit_row(layout)
     displaced = M.displaced_material(mat)
     if displaced is not None:
         layout.label(text=f"Remove puts '{displaced.name}' back in the slot", icon="INFO")
@@ -109,6 +111,12 @@ def draw_asset_row(layout, mat) -> None:
         row.operator("layered_brdf.mark_asset", text=text, icon="ASSET_MANAGER")
     row.operator("layered_brdf.build_asset_library", text="Build Looks Library..." if mat is None else "",
                  icon="ASSET_MANAGER" if mat is None else "FILE_FOLDER")
+
+
+def draw_fit_row(layout) -> None:
+    """Fit the layered material to a render or a Principled material (greyed out, saying why,
+    where Blender's Python lacks SciPy or colour-science)."""
+    layout.operator("layered_brdf.fit_to_render", icon="EYEDROPPER")
 
 
 class LAYERED_BRDF_PT_material(Panel):
