@@ -1,10 +1,12 @@
-"""The command line: ``python -m layered_brdf_addon [lookdev|gallery|render|batch] ...``.
+"""The command line: ``python -m layered_brdf_addon [lookdev|gallery|render|batch|fit] ...``.
 
 ``lookdev`` (the default) renders every preset on a shader ball under a bundled HDRI,
 one labelled look-development sheet; ``gallery`` renders the paper's Figs. 3-6 as one
 contact sheet;
 ``render`` renders one material on the reference sphere or on an object of a .blend;
-``batch`` renders the jobs of a TOML/JSON file, serially or on Dask.  The options of
+``batch`` renders the jobs of a TOML/JSON file, serially or on Dask; ``fit`` fits a
+material to a render, a reflectance table or a Principled BSDF material
+(:mod:`.fit_command`).  The options of
 the material's parameters are derived from
 :data:`~layered_brdf_addon.model.params.PARAM_SPECS`.
 
@@ -28,7 +30,7 @@ from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 from .staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 
 PROG = "layered-brdf"
-COMMANDS = ("lookdev", "gallery", "render", "batch")
+COMMANDS = ("lookdev", "gallery", "render", "batch", "fit")
 EXIT_OK, EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
@@ -119,7 +121,7 @@ def build_parser() -> argparse.ArgumentParser:
         "Without a command, renders the look-dev sheet.",
         epilog="exit codes: 0 ok, 1 a render or job failed, 2 invalid input (nothing written), 130 interrupted")
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{lookdev,gallery,render,batch}")
+    sub = parser.add_subparsers(dest="command", metavar="{" + ",".join(COMMANDS) + "}")
 
     from .lookdev import DEFAULT_OUTPUT, DEFAULT_SAMPLES, DEFAULT_SIZE, SAMPLES_RANGE, SIZE_RANGE
 
@@ -195,6 +197,10 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--timeout", default=None, metavar="SECONDS", help="stop a job after this long")
     b.add_argument("--report", default=None, metavar="FILE.json", help="also write the results as JSON")
     b.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+
+    from .fit_command import add_parser as add_fit_parser
+
+    add_fit_parser(sub)
     return parser
 
 
@@ -351,7 +357,9 @@ def _hint(e: ParameterError, options: Collection[str]) -> str:
     if isinstance(e, FileValueError) or e.name not in options:
         return ""
     if any(s.name == e.name for s in PARAM_SPECS) or e.name in ("sun_strength", "output", "resolution", "size",
-                                                                  "samples", "presets", "hdri", "columns", "object"):
+                                                                  "samples", "presets", "hdri", "columns", "object",
+                                                                  "vary", "starts", "start", "tile", "material",
+                                                                  "reflectance", "principled"):
         return f" (option --{e.name.replace('_', '-')})"
     return ""
 
@@ -383,6 +391,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_batch(ns)
         if ns.command == "gallery":
             return cmd_gallery(ns, argv)
+        if ns.command == "fit":
+            from .fit_command import cmd_fit
+
+            return cmd_fit(ns, argv)
         return cmd_lookdev(ns, argv)
     except ParameterError as e:
         print(f"{PROG}: error: {e}{_hint(e, vars(ns))}", file=sys.stderr)
