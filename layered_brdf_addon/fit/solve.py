@@ -148,15 +148,15 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     objective = _Objective(target, free, progress, should_stop)
     lo, hi = free.bounds()
     firsts = thickness_starts(objective, start, starts) if {"d_min", "d_max"} & set(names) else [start]
-    best, best_cost, tried = None, np.inf, []
+    best, best_de, tried = None, np.inf, []
     for first in firsts:
         sol = least_squares(objective, free.vector(first, START_MARGIN), bounds=(lo, hi), loss="soft_l1", f_scale=LOSS_SCALE,
                             x_scale=X_SCALE, diff_step=1e-3, max_nfev=steps_per_start)
         params = free.params(sol.x)
         de = objective.mean_delta_e(params)
         tried.append((first.d_min, first.d_max, de))
-        if sol.cost < best_cost:
-            best, best_cost = params, sol.cost
+        if de < best_de:  # the start whose result looks closest, not the lowest robust cost
+            best, best_de = params, de
         if de <= GOOD_ENOUGH:
             break
     de = objective.mean_delta_e(best)
