@@ -1,0 +1,103 @@
+"""Principled BSDF + Thin Film converted by a fit, judged on the look-dev ball under HDRIs.
+
+For a soap film, an oil film and anodised titanium made of Principled BSDF + Thin Film: the
+fit to their reference-sphere renders (three suns, ``blender.principled_target``), then the
+Principled material and the fitted layered material rendered by Cycles on the look-dev ball
+under each bundled HDRI named (Standard view transform, linear EXR); the mean CIEDE2000
+over the ball's pixels (those that differ from a render without the ball), colours on the
+scale of the Principled render's 99th percentile luminance.  Prints a table
+(``--markdown`` for docs/fitting.md).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from layered_brdf_addon.blender import lookdev  # noqa: E402
+from layered_brdf_addon.blender import principled_target as P  # noqa: E402
+from layered_brdf_addon.blender import scene as S  # noqa: E402
+from layered_brdf_addon.blender.fit_operator import run_fit  # noqa: E402
+from layered_brdf_addon.blender.material import apply_layered_material  # noqa: E402
+from layered_brdf_addon.fit import colour_space  # noqa: E402
+from layered_brdf_addon.model.presets import preset  # noqa: E402
+
+CONVERSIONS = {
+    "soap": (lambda: lookdev.principled_thin_film("Soap", 500.0, 1.33, (0.0, 0.0, 0.0), 0.0, 0.1,
+                                                  transmission=1.0), "soap_bubble"),
+    "oil": (lambda: lookdev.principled_thin_film("Oil", 350.0, 1.47, (0.01, 0.01, 0.012), 0.0, 0.15), "oil_slick"),
+    "titanium": (lambda: lookdev.principled_thin_film("Titanium", 200.0, 2.4, (0.542, 0.497, 0.449), 1.0, 0.2),
+                 "anodised_titanium"),
+}
+
+
+def render_ball(material, hdri: str, size: int, samples: int, folder: Path, name: str) -> np.ndarray:
+    """The look-dev ball with ``material`` (None: no ball) under ``hdri``: linear RGB."""
+    scene, ball = lookdev.build_lookdev_scene(size=size, samples=samples, hdri=hdri, view_transform="Standard")
+    try:
+        if material is None:
+            ball.hide_render = True
+        else:
+            ball.data.materials[0] = material
+        s = scene.render.image_settings
+        s.media_type, s.file_format, s.color_mode, s.color_depth = "IMAGE", "OPEN_EXR", "RGB", "32"
+        path = folder / f"{name}.exr"
+        S.render_to_file(path, scene)
+        return P.read_float_image(path)
+    finally:
+        lookdev.remove_scene(scene)
+
+
+def ball_delta_e(principled: np.ndarray, layered: np.ndarray, empty: np.ndarray) -> float:
+    ball = (np.abs(principled - empty).max(axis=-1) > 1e-3) | (np.abs(layered - empty).max(axis=-1) > 1e-3)
+    white = colour_space.white_of(principled[ball])
+    a, b = (colour_space.lab(np.maximum(x[ball], 0.0), white) for x in (principled, layered))
+    return float(np.mean(colour_space.delta_e_2000(a, b)))
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--hdris", nargs="+", default=["forest.exr", "courtyard.exr", "interior.exr"])
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--samples", type=int, default=64)
+    ap.add_argument("--markdown", action="store_true")
+    args = ap.parse_args(argv)
+    S.reset_blender()
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="layered_brdf_fit_hdri_") as tmp:
+        folder = Path(tmp)
+        empties = {h: render_ball(None, h, args.size, args.samples, folder, f"empty-{h}") for h in args.hdris}
+        for name, (make, start) in CONVERSIONS.items():
+            material = make()
+            views = P.principled_views_of(material)
+            t0 = time.perf_counter()
+            result = run_fit(views, P.start_for(preset(start), material))
+            seconds = time.perf_counter() - t0
+            import bpy
+
+            layered = apply_layered_material(bpy.data.materials.new(f"{name} fitted"), result.params)
+            errors = []
+            for h in args.hdris:
+                a = render_ball(material, h, args.size, args.samples, folder, f"{name}-p-{h}")
+                b = render_ball(layered, h, args.size, args.samples, folder, f"{name}-l-{h}")
+                errors.append(ball_delta_e(a, b, empties[h]))
+            rows.append((name, start, f"{result.mean_delta_e:.2f}", *(f"{e:.2f}" for e in errors), f"{seconds:.0f}"))
+    header = ("material", "start", "ΔE00 fitted (three suns)", *(f"ΔE00 ball, {h}" for h in args.hdris), "fit s")
+    if args.markdown:
+        print("| " + " | ".join(header) + " |")
+        print("|" + "---|" * len(header))
+        for r in rows:
+            print("| " + " | ".join(r) + " |")
+    else:
+        for r in (header, *rows):
+            print("  ".join(r))
+
+
+if __name__ == "__main__":
+    main()
