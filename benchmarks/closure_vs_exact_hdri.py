@@ -9,6 +9,7 @@ import argparse
 
 from layered_brdf_addon.model.presets import PRESETS, preset
 from layered_brdf_reference.hdri_accuracy import closure_error
+from report import table  # benchmarks/ is on sys.path when the script runs
 
 HDRIS = ("forest", "courtyard", "interior")
 
@@ -23,14 +24,7 @@ def main() -> None:
     for name in PRESETS:
         p = preset(name)
         rows.append([name, p.optics] + [f"{100 * closure_error(p, h)['l1']:.1f}%" for h in args.hdris])
-    if args.markdown:
-        print("| " + " | ".join(head) + " |")
-        print("|" + " --- |" * len(head))
-        for r in rows:
-            print("| " + " | ".join(r) + " |")
-    else:
-        for r in [head] + rows:
-            print("  ".join(f"{c:>18s}" for c in r))
+    print(table(head, rows, args.markdown))
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ from layered_brdf_addon.blender.fit_operator import run_fit  # noqa: E402
 from layered_brdf_addon.blender.material import apply_layered_material  # noqa: E402
 from layered_brdf_addon.fit import colour_space  # noqa: E402
 from layered_brdf_addon.model.presets import preset  # noqa: E402
+from report import table  # noqa: E402  (benchmarks/ is on sys.path when the script runs)
 
 CONVERSIONS = {
     "soap": (lambda: lookdev.principled_thin_film("Soap", 500.0, 1.33, (0.0, 0.0, 0.0), 0.0, 0.1,
@@ -89,14 +90,7 @@ def main(argv=None) -> None:
                 errors.append(ball_delta_e(a, b, empties[h]))
             rows.append((name, start, f"{result.mean_delta_e:.2f}", *(f"{e:.2f}" for e in errors), f"{seconds:.0f}"))
     header = ("material", "start", "ΔE00 fitted (three suns)", *(f"ΔE00 ball, {h}" for h in args.hdris), "fit s")
-    if args.markdown:
-        print("| " + " | ".join(header) + " |")
-        print("|" + "---|" * len(header))
-        for r in rows:
-            print("| " + " | ".join(r) + " |")
-    else:
-        for r in (header, *rows):
-            print("  ".join(r))
+    print(table(header, rows, args.markdown))
 
 
 if __name__ == "__main__":

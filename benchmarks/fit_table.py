@@ -18,6 +18,7 @@ from layered_brdf_addon.fit.solve import fit  # noqa: E402
 from layered_brdf_addon.fit.targets import ReflectanceTarget, SphereTarget  # noqa: E402
 from layered_brdf_addon.model.presets import preset  # noqa: E402
 from layered_brdf_reference.fit_cases import FILMS, SUNS, held_out, image_delta_e, tmm_rows, views_of  # noqa: E402
+from report import table  # noqa: E402  (benchmarks/ is on sys.path when the script runs)
 
 HEADER = ("case", "start", "free", "ΔE00 fitted", "ΔE00 image", "evaluations", "CPU s", "wall s", "found (truth)")
 
@@ -57,16 +58,7 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args(argv)
-    rows = sphere_rows() + table_rows()
-    if args.markdown:
-        print("| " + " | ".join(HEADER) + " |")
-        print("|" + "---|" * len(HEADER))
-        for row in rows:
-            print("| " + " | ".join(map(str, row)) + " |")
-    else:
-        widths = [max(len(str(x)) for x in col) for col in zip(HEADER, *rows)]
-        for row in (HEADER, *rows):
-            print("  ".join(str(x).ljust(w) for x, w in zip(row, widths)))
+    print(table(HEADER, sphere_rows() + table_rows(), args.markdown))
 
 
 if __name__ == "__main__":

@@ -7,6 +7,17 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent / "results"
 
 
+def table(header, rows, markdown: bool = False) -> str:
+    """A measured table: markdown for the docs, or columns aligned for a terminal."""
+    rows = [tuple(map(str, r)) for r in rows]
+    header = tuple(map(str, header))
+    if markdown:
+        return "\n".join(["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+                         + ["| " + " | ".join(r) + " |" for r in rows])
+    widths = [max(len(x) for x in col) for col in zip(header, *rows)]
+    return "\n".join("  ".join(x.ljust(w) for x, w in zip(r, widths)) for r in (header, *rows))
+
+
 def accuracy_tables() -> str:
     d = json.loads((HERE / "accuracy.json").read_text())
     modes = d["accuracy"]["modes"]
