@@ -1,6 +1,8 @@
 """Small Blender set-ups shared by the tests that drive the add-on without rendering."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import bpy
 import pytest
 
@@ -54,3 +56,57 @@ def load_preset(obj, name):
     activate(obj)
     assert bpy.ops.layered_brdf.load_preset(preset=name) == {"FINISHED"}
     return obj.active_material
+
+
+class Layout:
+    """Records what a panel draws (stands in for UILayout, which needs a window)."""
+
+    def __init__(self, log):
+        self.log = log
+        self.alert = False
+        self.enabled = True
+        self.active = True
+        self.use_property_split = False
+        self.use_property_decorate = False
+
+    def row(self, **_):
+        return Layout(self.log)
+
+    column = box = row
+
+    def label(self, text="", icon="NONE", **_):
+        self.log.append(("label", text, self.alert))
+
+    def prop(self, data, prop, text=None, **_):
+        assert prop in data.bl_rna.properties, f"{data!r} has no property {prop}"
+        self.log.append(("prop", data, prop, text))
+
+    def operator(self, idname, text=None, **_):
+        props = SimpleNamespace()
+        self.log.append(("operator", idname, text, props))
+        return props
+
+    def menu(self, menu, text="", **_):
+        assert getattr(bpy.types, menu, None) is not None, f"menu {menu} is not registered"
+        self.log.append(("menu", menu, text))
+
+    def separator(self, **_):
+        pass
+
+
+def draw_panels(obj):
+    """What the material panel and its parameter panels draw for ``obj``: the log of a :class:`Layout`."""
+    from layered_brdf_addon.blender import ui
+
+    log = []
+    ctx = SimpleNamespace(object=obj, scene=bpy.context.scene)
+    ui.LAYERED_BRDF_PT_material.draw(SimpleNamespace(layout=Layout(log)), ctx)
+    for panel in ui.PARAM_PANELS:
+        if panel.poll(ctx):
+            panel.draw(SimpleNamespace(layout=Layout(log), group=panel.group), ctx)
+    return log
+
+
+def labels(log, alert=None):
+    """The labels of a panel log (only the alerts, or only the others, when ``alert`` is given)."""
+    return [e[1] for e in log if e[0] == "label" and (alert is None or e[2] == alert)]

@@ -26,7 +26,7 @@ from layered_brdf_addon.blender import properties, ui
 from layered_brdf_addon.model import preset
 from layered_brdf_addon.model.params import LayeredParams, ParameterError, iter_sockets
 
-from blender_helpers import activate, add_sphere, addon, load_preset
+from blender_helpers import activate, add_sphere, addon, draw_panels, labels, load_preset
 
 LEGACY = Path(__file__).parent / "data" / "legacy_sockets.blend"
 STAMP = node_group_builder.STAMP_KEY
@@ -60,44 +60,9 @@ def non_surface_objects():
     return made
 
 
-class Recorder:
-    """Records the labels a panel draws (stands in for UILayout, which needs a window)."""
-
-    def __init__(self, log):
-        self.log = log
-        self.alert = False
-        self.use_property_split = False
-
-    def row(self, **_):
-        return Recorder(self.log)
-
-    column = box = row
-
-    def label(self, text="", **_):
-        self.log.append((text, self.alert))
-
-    def prop(self, *_, **__):
-        pass
-
-    def operator(self, *_, **__):
-        return SimpleNamespace()
-
-    def menu(self, *_, **__):
-        pass
-
-    def separator(self, **_):
-        pass
-
-
 def panel_labels(obj, alert=None):
     """The labels the material panel and its parameter panels draw for ``obj``."""
-    log = []
-    ctx = SimpleNamespace(object=obj, scene=bpy.context.scene)
-    ui.LAYERED_BRDF_PT_material.draw(SimpleNamespace(layout=Recorder(log)), ctx)
-    for panel in ui.PARAM_PANELS:
-        if panel.poll(ctx):
-            panel.draw(SimpleNamespace(layout=Recorder(log), group=panel.group), ctx)
-    return [text for text, is_alert in log if alert is None or is_alert == alert]
+    return labels(draw_panels(obj), alert)
 
 
 def socket_values_of(params):

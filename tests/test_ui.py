@@ -31,7 +31,7 @@ from layered_brdf_addon.model.base_layers import base_node
 from layered_brdf_addon.model.presets import PRESETS
 from layered_brdf_addon.backends import node_group as node_group_builder
 
-from blender_helpers import addon, user_dir, activate, add_sphere, load_preset
+from blender_helpers import addon, user_dir, activate, add_sphere, draw_panels, labels, load_preset
 from constants import MAX_FAILING_COARSE as MAX_FAILING, REL_TOL_COARSE as REL_TOL, SUN_40 as SUN
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -77,56 +77,6 @@ def assert_matches(beauty, expected, geo, k, label):
     mask = lit_mask(geo, SUN.l) & (geo.sphere == k)
     ag = agreement(beauty, expected, mask, rel_tol=REL_TOL)
     assert ag.failing_fraction <= MAX_FAILING, f"{label}: {ag}"
-
-
-class Layout:
-    """Records what a panel draws (stands in for UILayout, which needs a window)."""
-
-    def __init__(self, log):
-        self.log = log
-        self.alert = False
-        self.enabled = True
-        self.active = True
-        self.use_property_split = False
-        self.use_property_decorate = False
-
-    def row(self, **_):
-        return Layout(self.log)
-
-    column = box = row
-
-    def label(self, text="", icon="NONE", **_):
-        self.log.append(("label", text, self.alert))
-
-    def prop(self, data, prop, text=None, **_):
-        assert prop in data.bl_rna.properties, f"{data!r} has no property {prop}"
-        self.log.append(("prop", data, prop, text))
-
-    def operator(self, idname, text=None, **_):
-        props = SimpleNamespace()
-        self.log.append(("operator", idname, text, props))
-        return props
-
-    def menu(self, menu, text="", **_):
-        assert getattr(bpy.types, menu, None) is not None, f"menu {menu} is not registered"
-        self.log.append(("menu", menu, text))
-
-    def separator(self, **_):
-        pass
-
-
-def draw_panels(obj):
-    log = []
-    ctx = SimpleNamespace(object=obj, scene=bpy.context.scene)
-    ui.LAYERED_BRDF_PT_material.draw(SimpleNamespace(layout=Layout(log)), ctx)
-    for panel in ui.PARAM_PANELS:
-        if panel.poll(ctx):
-            panel.draw(SimpleNamespace(layout=Layout(log), group=panel.group), ctx)
-    return log
-
-
-def labels(log, alert=None):
-    return [e[1] for e in log if e[0] == "label" and (alert is None or e[2] == alert)]
 
 
 # --- registration --------------------------------------------------------------------------
