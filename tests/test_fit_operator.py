@@ -20,7 +20,7 @@ from layered_brdf_addon.blender import fit_operator, lookdev, properties, ui
 from layered_brdf_addon.blender import material as M
 from layered_brdf_addon.blender import scene as S
 from layered_brdf_addon.cli.sidecar import SIDECAR_FORMAT, camera_to_dict, sun_to_dict, write_json
-from layered_brdf_addon.fit.sidecar_views import sidecar_views
+from layered_brdf_addon.blender.sidecar_views import sidecar_views
 from layered_brdf_addon.fit.solve import FitCancelled
 from layered_brdf_addon.fit.targets import TargetError
 from layered_brdf_addon.model.presets import preset

@@ -1,6 +1,6 @@
 """*Fit to Render...*: the active object's layered material fitted to a target, in the panel.
 
-The target is a reference-sphere render (its sidecar ``.json``, :mod:`..fit.sidecar_views`)
+The target is a reference-sphere render (its sidecar ``.json``, :mod:`.sidecar_views`)
 or a Principled BSDF material of the file (rendered on the reference sphere under a few
 suns, :mod:`.principled_target`).  Rendering happens on the main thread (Blender's data is
 not to be touched from another); the fit (:func:`..fit.solve.fit`, seconds to a minute)
@@ -291,7 +291,7 @@ material of this file (Esc cancels)"""
         from .principled_target import principled_views_of
 
         if self.source == "RENDER":
-            from ..fit.sidecar_views import sidecar_views
+            from .sidecar_views import sidecar_views
 
             if not self.filepath:
                 raise ParameterError("filepath", self.filepath, "the path of a render's sidecar .json")

@@ -1,6 +1,7 @@
-"""A reference-sphere render as a fitting target: its sidecar ``STEM.json`` and beauty pass
-``STEM.exr`` read back as a :class:`~.targets.SphereView` (``layered-brdf fit`` on a render,
-the panel's *Fit to Render...*).
+"""A reference-sphere render as a fitting target for the panel's *Fit to Render...*: its
+sidecar ``STEM.json`` and beauty pass ``STEM.exr`` read back as a
+:class:`~..fit.targets.SphereView` (``layered-brdf fit`` reads its targets in
+``cli/fit_command.py``, with the command line's own checks and messages).
 
 The sidecar records the camera, the sun and the sphere centres of a ``render`` of the
 reference scene or of a ``gallery``; the EXR's Combined pass holds the linear pixels.  The
@@ -16,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from .targets import SphereView, TargetError
+from ..fit.targets import SphereView, TargetError
 
 
 def read_exr_beauty(path: str | os.PathLike) -> np.ndarray:
@@ -72,7 +73,7 @@ def sidecar_views(path: str | os.PathLike, *, sphere: int = 0,
 
     ``read_beauty(exr_path)`` reads the EXR's Combined pass (default :func:`read_exr_beauty`).
     A file that is not the sidecar of a reference-sphere render or gallery, a missing EXR or
-    sphere is a :class:`~.targets.TargetError` saying which.
+    sphere is a :class:`~..fit.targets.TargetError` saying which.
     """
     from ..cli.sidecar import read_sidecar, scene_from_sidecar
     from ..cli.staging import OutputPaths, output_stem
