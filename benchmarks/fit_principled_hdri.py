@@ -30,8 +30,7 @@ from layered_brdf_addon.model.presets import preset  # noqa: E402
 from report import table  # noqa: E402  (benchmarks/ is on sys.path when the script runs)
 
 CONVERSIONS = {
-    "soap": (lambda: lookdev.principled_thin_film("Soap", 500.0, 1.33, (0.0, 0.0, 0.0), 0.0, 0.1,
-                                                  transmission=1.0), "soap_bubble"),
+    "soap": (lambda: lookdev.principled_soap_film("Soap"), "soap_bubble"),
     "oil": (lambda: lookdev.principled_thin_film("Oil", 350.0, 1.47, (0.01, 0.01, 0.012), 0.0, 0.15), "oil_slick"),
     "titanium": (lambda: lookdev.principled_thin_film("Titanium", 200.0, 2.4, (0.542, 0.497, 0.449), 1.0, 0.2),
                  "anodised_titanium"),
@@ -67,30 +66,51 @@ def main(argv=None) -> None:
     ap.add_argument("--hdris", nargs="+", default=["forest.exr", "courtyard.exr", "interior.exr"])
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--samples", type=int, default=64)
+    ap.add_argument("--fit-hdris", nargs="*", default=[],
+                    help="HDRIs whose reference-sphere renders join the three suns' in the fit")
+    ap.add_argument("--only", nargs="*", default=list(CONVERSIONS))
+    ap.add_argument("--sheet", help="also write a PNG: per material, the Principled and the fitted ball "
+                                    "under each HDRI")
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args(argv)
     S.reset_blender()
-    rows = []
+    rows, sheet_rows = [], []
     with tempfile.TemporaryDirectory(prefix="layered_brdf_fit_hdri_") as tmp:
         folder = Path(tmp)
         empties = {h: render_ball(None, h, args.size, args.samples, folder, f"empty-{h}") for h in args.hdris}
-        for name, (make, start) in CONVERSIONS.items():
+        for name in args.only:
+            make, start = CONVERSIONS[name]
             material = make()
-            views = P.principled_views_of(material)
+            views = P.principled_views_of(material, hdris=[lookdev.hdri_path(h) for h in args.fit_hdris])
             t0 = time.perf_counter()
             result = run_fit(views, P.start_for(preset(start), material))
             seconds = time.perf_counter() - t0
             import bpy
 
             layered = apply_layered_material(bpy.data.materials.new(f"{name} fitted"), result.params)
-            errors = []
+            errors, tiles = [], []
             for h in args.hdris:
                 a = render_ball(material, h, args.size, args.samples, folder, f"{name}-p-{h}")
                 b = render_ball(layered, h, args.size, args.samples, folder, f"{name}-l-{h}")
                 errors.append(ball_delta_e(a, b, empties[h]))
+                tiles += [a, b]
+            sheet_rows.append(np.concatenate(tiles, axis=1))
             rows.append((name, start, f"{result.mean_delta_e:.2f}", *(f"{e:.2f}" for e in errors), f"{seconds:.0f}"))
     header = ("material", "start", "ΔE00 fitted (three suns)", *(f"ΔE00 ball, {h}" for h in args.hdris), "fit s")
     print(table(header, rows, args.markdown))
+    if args.sheet:
+        save_sheet(Path(args.sheet), np.concatenate(sheet_rows, axis=0))
+
+
+def save_sheet(path: Path, linear: np.ndarray) -> None:
+    """``linear`` RGB as an sRGB PNG (the Standard view transform the balls were rendered for)."""
+    import colour
+
+    from layered_brdf_addon.cli.codecs import save_png
+
+    encoded = colour.cctf_encoding(np.clip(linear, 0.0, 1.0), function="sRGB")
+    save_png(path, np.round(encoded * 255.0).astype(np.uint8))
+    print(f"wrote {path}: per HDRI, Principled | fitted")
 
 
 if __name__ == "__main__":

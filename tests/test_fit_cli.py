@@ -299,6 +299,8 @@ BAD_INPUTS = {
     "two targets": (lambda folder: [folder / "t.json", "--reflectance", folder / "r.csv"], ["exactly one target"]),
     "--material without --principled": (lambda folder: [*_missing_exr(folder), "--material", "Gold"],
                                         ["'material'", "without --principled"]),
+    "--hdri without --principled": (lambda folder: [*_missing_exr(folder), "--hdri", "forest"],
+                                    ["'hdri'", "without --principled"]),
     "--tile of a reference render": (lambda folder: [*_scene_kind("reference")(folder), "--tile", "0"],
                                      ["'tile'", "one sphere"]),
 }
@@ -455,6 +457,7 @@ def test_a_principled_material_is_fitted(tmp_path, principled_blend, material, o
     assert files_under(tmp_path / "out") == ["m.json", "m.png"]
     record = json.loads((tmp_path / "out" / "m.json").read_text())["fit"]
     assert record["target"]["kind"] == "principled" and len(record["target"]["suns"]) == 3
+    assert record["target"]["hdris"] == ["forest.exr"]
     assert record["target"]["material"] == material
     assert record["mean_delta_e_2000"] <= PRINCIPLED_DELTA_E
     print(f"\nPrincipled {material} fitted: {record['mean_delta_e_2000']:.3f}, fit {record['seconds']:.1f} s, "
@@ -466,4 +469,13 @@ def test_a_missing_principled_material_exits_2(tmp_path, principled_blend):
     res = run_cli("fit", "--principled", principled_blend, "--material", "Gold", "--output", "out/x", cwd=tmp_path)
     assert res.returncode == 2, res.stderr
     assert "'material' = 'Gold'" in res.stderr and "TitaniumFilm" in res.stderr
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.slow
+def test_an_hdri_blender_does_not_ship_exits_2_before_rendering(tmp_path, principled_blend):
+    res = run_cli("fit", "--principled", principled_blend, "--material", "PearlFilm", "--hdri", "moon",
+                  "--output", "out/x", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    assert "'hdri' = 'moon'" in res.stderr and "forest" in res.stderr
     assert not (tmp_path / "out").exists()

@@ -30,7 +30,7 @@ SIZE = 64
 
 def soap_film(name="Soap film"):
     """Blender's soap bubble: a clear base (IOR 1, transmission) under a 500 nm film of water."""
-    return lookdev.principled_thin_film(name, 500.0, 1.33, (0.0, 0.0, 0.0), 0.0, 0.1, transmission=1.0)
+    return lookdev.principled_soap_film(name)
 
 
 def saved(tmp_path, *materials):

@@ -296,7 +296,10 @@ material of this file (Esc cancels)"""
             if not self.filepath:
                 raise ParameterError("filepath", self.filepath, "the path of a render's sidecar .json")
             return sidecar_views(bpy.path.abspath(self.filepath), sphere=self.sphere)
-        return principled_views_of(self._principled_material())
+        from ..fit.environment import DEFAULT_HDRIS
+        from .lookdev import hdri_path
+
+        return principled_views_of(self._principled_material(), hdris=[hdri_path(h) for h in DEFAULT_HDRIS])
 
     def _principled_material(self):
         if self.principled == NO_MATERIAL:

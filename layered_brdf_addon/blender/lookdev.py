@@ -336,6 +336,15 @@ def principled_thin_film(name: str, thickness_nm: float, ior: float, base_color,
 
 
 METAL_WORDS = ("metal", "titanium")
+# A clear base for Principled's transmission, which the Base Color tints: a black base
+# transmits nothing, and a "clear" film over it renders as a dark iridescent mirror.
+CLEAR_BASE = (1.0, 1.0, 1.0)
+
+
+def principled_soap_film(name: str = "Soap film", thickness_nm: float = 500.0, ior: float = 1.33,
+                         roughness: float = 0.1):
+    """Blender's soap bubble: a clear base (white, IOR 1, transmission 1) under a film of water."""
+    return principled_thin_film(name, thickness_nm, ior, CLEAR_BASE, 0.0, roughness, transmission=1.0)
 
 
 def thin_film_equivalent(name: str, params: LayeredParams) -> dict[str, Any]:
@@ -351,6 +360,8 @@ def thin_film_equivalent(name: str, params: LayeredParams) -> dict[str, Any]:
     alpha = math.sqrt(2.0 / (params.e0 + 2.0))
     metallic = 1.0 if any(w in name.lower() for w in METAL_WORDS) else 0.0
     colour = params.base_color
+    if params.base_layer == "transparent":
+        colour = CLEAR_BASE  # Principled tints its transmission by the base colour
     if params.optics == "physical" and metallic:
         colour = tuple(((n - 1.0) ** 2 + k * k) / ((n + 1.0) ** 2 + k * k) for n, k in zip(params.r2, params.k2))
     out = dict(thickness_nm=0.5 * (params.d_min + params.d_max), ior=params.r1_g, base_color=colour,

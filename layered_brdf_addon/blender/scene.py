@@ -431,6 +431,29 @@ def set_uniform_environment(radiance: float = 1.0, scene=None) -> None:
     bg.inputs["Strength"].default_value = radiance
 
 
+def set_hdri_environment(image_path, strength: float = 1.0, scene=None):
+    """Replace the lights by an equirectangular HDRI on a world of its own (Environment
+    Texture, default mapping, ``strength``); returns the world.  The world and the image are
+    new datablocks: whoever builds a scene with them removes them with it."""
+    scene = scene or bpy.context.scene
+    for obj in list(scene.objects):
+        if obj.type == "LIGHT":
+            bpy.data.objects.remove(obj)
+    world = bpy.data.worlds.new("Layered BRDF environment")
+    nt = world.node_tree
+    env = nt.nodes.new("ShaderNodeTexEnvironment")
+    env.image = bpy.data.images.load(str(image_path), check_existing=False)
+    bg = nt.nodes.get("Background") or nt.nodes.new("ShaderNodeBackground")
+    bg.inputs["Strength"].default_value = strength
+    nt.links.new(env.outputs["Color"], bg.inputs["Color"])
+    out = next((n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld"), None) \
+        or nt.nodes.new("ShaderNodeOutputWorld")
+    if not bg.outputs[0].links:
+        nt.links.new(bg.outputs[0], out.inputs["Surface"])
+    scene.world = world
+    return world
+
+
 def set_area_light(matrix, size: float, power: float, scene=None):
     """Replace the lights by one square area light (world matrix ``matrix``, emitting along -Z)."""
     scene = scene or bpy.context.scene

@@ -39,6 +39,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .. import __version__
+from ..fit.environment import DEFAULT_HDRIS
 from ..model.params import PARAM_SPECS, LayeredParams, ParameterError
 from ..model.presets import PRESETS, preset
 from .requests import (MAX_INPUT_BYTES, MAX_STEM_BYTES, MAX_TEXT, file_label, from_file, int_option,
@@ -58,6 +59,7 @@ STARTS_RANGE = (1, 10)
 STEPS_PER_START = 40  # the optimiser's steps from each start
 PRINCIPLED_SIZE = 96
 PRINCIPLED_SAMPLES = 1
+PRINCIPLED_HDRIS = DEFAULT_HDRIS
 PRESET_FORMAT = "layered_brdf.preset"  # the panel's user presets (blender/user_presets.py)
 PRESET_FORMAT_VERSION = 1
 DEFAULT_OUTPUT_DIR = Path("out")
@@ -102,6 +104,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
                      help=f"--principled: pixels of each render (default {PRINCIPLED_SIZE})")
     tgt.add_argument("--samples", default=None, metavar="N",
                      help=f"--principled: samples per pixel (default {PRINCIPLED_SAMPLES}, exact under a sun)")
+    tgt.add_argument("--hdri", nargs="+", default=None, metavar="NAME",
+                     help="--principled: Blender's bundled HDRIs the material is also rendered under and fitted "
+                          f"to (default {' '.join(PRINCIPLED_HDRIS)}; 'none': the suns only)")
     st = f.add_argument_group("start and free parameters")
     st.add_argument("--start", default=None, metavar="PRESET",
                     help="the preset the fit starts from, whose modes (optics, lower medium, normals, thickness "
@@ -169,7 +174,7 @@ def source_of(ns: argparse.Namespace) -> Source:
     if ns.tile is not None and kind != "target":
         raise ParameterError("tile", ns.tile, "no value without TARGET (a gallery render's sphere)")
     if kind != "principled":
-        for name in ("material", "size", "samples"):
+        for name in ("material", "size", "samples", "hdri"):
             if getattr(ns, name) is not None:
                 raise ParameterError(name, getattr(ns, name), "no value without --principled")
     if kind == "target":
@@ -381,6 +386,7 @@ def load_principled_target(source: Source, ns: argparse.Namespace, guard) -> Loa
 
     size = int_option("size", ns.size, 8, 4096) if ns.size is not None else PRINCIPLED_SIZE
     samples = int_option("samples", ns.samples, 1, 65536) if ns.samples is not None else PRINCIPLED_SAMPLES
+    hdri_names = list(PRINCIPLED_HDRIS) if ns.hdri is None else [] if ns.hdri == ["none"] else list(ns.hdri)
     try:
         blend = check_blend_file(source.path)
     except ParameterError as e:
@@ -389,12 +395,14 @@ def load_principled_target(source: Source, ns: argparse.Namespace, guard) -> Loa
 
     tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
     guard.add_cleanup(tempdirs.remove_process_tempdir)
+    from ..blender.lookdev import hdri_path
     from ..blender.principled_target import principled_views
 
+    hdris = [hdri_path(name) for name in hdri_names]  # a name Blender does not ship: refused before rendering
     guard.arm()
     with blender_output(ns.verbose):
         try:
-            views = principled_views(blend, source.name, size=size, samples=samples)
+            views = principled_views(blend, source.name, size=size, samples=samples, hdris=hdris)
         except ParameterError as e:
             if e.name == "blend":
                 raise ParameterError("principled", e.value, e.allowed) from None
@@ -406,7 +414,9 @@ def load_principled_target(source: Source, ns: argparse.Namespace, guard) -> Loa
         raise ParameterError("material", source.name, f"a material that reflects light on the reference "
                              f"sphere ({e})") from None
     record = {"kind": "principled", "blend": blend, "material": source.name, "size": size, "samples": samples,
-              "suns": [list(v.sun.direction) for v in views], "pixels": int(len(target.observed))}
+              "suns": [list(v.sun.direction) for v in views if v.sun is not None],
+              "hdris": [v.environment.name for v in views if v.environment is not None],
+              "pixels": int(len(target.observed))}
     return LoadedTarget(target, record)
 
 

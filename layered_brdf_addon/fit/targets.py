@@ -1,4 +1,4 @@
-"""What a fit matches: pixels of spheres under suns, or a reflectance table.
+"""What a fit matches: pixels of spheres under suns or an HDRI, or a reflectance table.
 
 A target holds observed colours and predicts them from parameters with the numpy backend
 of the shading program.  Both kinds give ``observed`` (N, 3) linear RGB and
@@ -16,7 +16,9 @@ from ..model.params import LayeredParams
 from ..model.policy import plan_effects
 from ..model.sphere import OrthoCamera, Sun, lower_normal, sphere_geometry, thickness_field
 from . import colour_space
-from .cycles_closures import closure_shading
+from .cycles_closures import closure_shading, shade_closures
+from .environment import Environment
+from .see_through import see_through
 
 
 GROUP_BINS = 6  # pixels seen alike: sixths of the half-vector's angle and of the view's cosine
@@ -48,13 +50,20 @@ class TargetError(ValueError):
 
 @dataclass
 class SphereView:
-    """One image of spheres under one sun: the pixels of sphere ``sphere`` are fitted."""
+    """One image of spheres under one sun, or under an environment (``environment`` given:
+    the world's HDRI is the only light, ``sun`` is None): the pixels of sphere ``sphere`` are
+    fitted."""
 
     image: np.ndarray  # (H, W, 3) linear RGB, row 0 at the top
     camera: OrthoCamera
-    sun: Sun
+    sun: Sun | None
     centers: tuple = ((0.0, 0.0, 0.0),)
     sphere: int = 0
+    environment: Environment | None = None
+
+    def __post_init__(self):
+        if (self.sun is None) == (self.environment is None):
+            raise TargetError("a view is lit by one sun or by one environment")
 
 
 @dataclass
@@ -151,15 +160,21 @@ class SphereTarget:
 
     def _groups(self) -> np.ndarray:
         """Each sampled pixel's group: its view, and the sixths of the angle between its
-        normal and the half-vector and of its view cosine."""
+        normal and the half-vector (under an environment: of the mirrored view's height) and
+        of its view cosine."""
         if self._group_of is None:
             keys = []
             for k, p in enumerate(self._points):
-                v, l = p["v"], p["view"].sun.l
-                h = (v + l) / max(float(np.linalg.norm(v + l)), 1e-12)
-                nh = np.clip(p["n0"] @ h, 0.0, 1.0)
+                v = p["v"]
                 nv = np.clip(p["n0"] @ v, 0.0, 1.0)
-                a = np.minimum((np.arccos(nh) / (np.pi / 2) * GROUP_BINS).astype(int), GROUP_BINS - 1)
+                if p["view"].sun is not None:
+                    l = p["view"].sun.l
+                    h = (v + l) / max(float(np.linalg.norm(v + l)), 1e-12)
+                    nh = np.clip(p["n0"] @ h, 0.0, 1.0)
+                    a = np.minimum((np.arccos(nh) / (np.pi / 2) * GROUP_BINS).astype(int), GROUP_BINS - 1)
+                else:  # under an environment: the height of the mirrored view (sky, horizon, ground)
+                    r = 2.0 * nv[:, None] * p["n0"] - v
+                    a = np.minimum(((r[:, 2] + 1.0) / 2.0 * GROUP_BINS).astype(int), GROUP_BINS - 1)
                 b = np.minimum((nv * GROUP_BINS).astype(int), GROUP_BINS - 1)
                 keys.append((k * GROUP_BINS + a) * GROUP_BINS + b)
             _, group = np.unique(np.concatenate(keys), return_inverse=True)
@@ -195,10 +210,25 @@ class SphereTarget:
 
     @staticmethod
     def _shade(params: LayeredParams, pts: dict, d: np.ndarray) -> np.ndarray:
-        n1 = lower_normal(params, pts["n0"], pts["p_object"], d)
-        sun = pts["view"].sun
-        return sun.strength * closure_shading(params, pts["n0"], n1, d, sun.l, pts["v"], ng=pts["n0"],
-                                              plan=plan_effects(params))
+        view, plan, v = pts["view"], plan_effects(params), pts["v"]
+
+        def side(n0, p_object, d):
+            n1 = lower_normal(params, n0, p_object, d)
+            if view.environment is not None:
+                closures = shade_closures(params, n0, n1, d, v, plan)
+                return view.environment.shade(closures, n0, v, plan.lobe, ng=n0)
+            return view.sun.strength * closure_shading(params, n0, n1, d, view.sun.l, v, ng=n0, plan=plan)
+
+        front = side(pts["n0"], pts["p_object"], d)
+        if params.base_layer != "transparent":
+            return front
+        field_ = thickness_field(params)  # None for a noise: the far side at the same level
+
+        def far(n_far, p_far):
+            return side(n_far, p_far, d if field_ is None else field_(p_far))
+
+        background = np.zeros(3) if view.environment is None else view.environment.radiance(-np.asarray(v))
+        return front + see_through(params, plan, pts["n0"], v, far, background)
 
     def render(self, params: LayeredParams, view: int = 0) -> np.ndarray:
         """The whole image of view ``view`` for ``params`` (the fitted sphere only)."""
