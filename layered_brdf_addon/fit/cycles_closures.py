@@ -33,6 +33,8 @@ turned into a closure weight by dividing by that closure's own value there
 """
 from __future__ import annotations
 
+from typing import Mapping, Sequence
+
 import numpy as np
 
 from ..model import ops_numpy, program
@@ -142,16 +144,58 @@ def ensure_valid_specular_reflection(Ng, v, N):
 CLOSURE_WEIGHT_CUTOFF = 1e-5  # Cycles drops a closure whose mean weight is below this
 
 
-def program_inputs(params: LayeredParams) -> dict:
-    return program.program_inputs(params.to_dict())
+def parameter_values(params: LayeredParams | Mapping) -> dict:
+    """The per-parameter values the program reads: a :class:`LayeredParams`'s, or a mapping
+    of them as it is (:func:`stacked_values`)."""
+    return dict(params) if isinstance(params, Mapping) else params.to_dict()
 
 
-def shade_closures(params: LayeredParams, n0, n1, d, v, plan: EffectPlan | None = None,
+def program_inputs(params: LayeredParams | Mapping) -> dict:
+    return program.program_inputs(parameter_values(params))
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def stack_key(params: LayeredParams) -> tuple:
+    """What the parameter sets of one stack share (:func:`stacked_values`): their
+    :class:`EffectPlan` (the program's control flow) and every value that is not a number (a
+    mode, a named medium, the base layer), which a column cannot hold."""
+    return plan_effects(params), tuple((k, v) for k, v in params.to_dict().items() if not _is_number(v))
+
+
+def stacked_values(params_list: Sequence[LayeredParams]) -> dict:
+    """The values of ``K`` parameter sets for one run of the program: a value the sets share
+    stays a number, one that differs becomes a column (K, 1), which broadcasts against the
+    per-point arrays (N,) and (N, 3).  Every result of the run then has a leading axis K:
+    one run shades every set, where a run per set would repeat the Python work of the
+    program's many small steps K times.  The sets must share one :func:`stack_key`."""
+    dicts = [p.to_dict() for p in params_list]
+    out = {}
+    for name, value in dicts[0].items():
+        values = [d[name] for d in dicts]
+        differ = values.count(value) < len(values)
+        out[name] = np.array(values, dtype=float)[:, None] if _is_number(value) and differ else value
+    return out
+
+
+def points_shape(n0, n1, d, v) -> tuple:
+    """The shape of the shading points, the vector axis left out: that of ``n0``, grown by
+    whatever the thickness, lower normal or view add (a stack's leading axis)."""
+    return np.broadcast_shapes(np.shape(n0)[:-1], np.shape(n1)[:-1], np.shape(d), np.shape(v)[:-1])
+
+
+def shade_closures(params: LayeredParams | Mapping, n0, n1, d, v, plan: EffectPlan | None = None,
                    wavelengths=WAVELENGTHS_NM):
-    """Run the shading program on numpy arrays: the closures the shaders return."""
-    n0 = np.asarray(n0, dtype=float)
+    """Run the shading program on numpy arrays: the closures the shaders return.
+
+    ``params``: a :class:`LayeredParams`, or the values of a stack of them
+    (:func:`stacked_values`, with their ``plan``)."""
+    shape = points_shape(n0, n1, d, v)
+    n0 = np.broadcast_to(np.asarray(n0, dtype=float), shape + (3,))
     v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
-    d = np.broadcast_to(np.asarray(d, dtype=float), n0.shape[:-1])
+    d = np.broadcast_to(np.asarray(d, dtype=float), shape)
     plan = plan or plan_effects(params)
     return program.shade(ops_numpy, program_inputs(params), ops_numpy.vec(n0), ops_numpy.vec(n1), d,
                          ops_numpy.vec(v), plan, wavelengths)
@@ -189,9 +233,13 @@ def evaluate_closures(result, n0, v, l, lobe_kind="beckmann", ng=None, bump_corr
     return out
 
 
-def closure_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTHS_NM, ng=None,
+def closure_shading(params: LayeredParams | Mapping, n0, n1, d, l, v, wavelengths=WAVELENGTHS_NM, ng=None,
                     plan: EffectPlan | None = None):
-    """What the shaders render per unit sun irradiance (same signature as ``exact_shading``)."""
+    """What the shaders render per unit sun irradiance (same signature as ``exact_shading``).
+
+    ``params`` may be the values of a stack of parameter sets (:func:`stacked_values`, with
+    their ``plan``): the result then has the stack's leading axis."""
     plan = plan or plan_effects(params)
+    n0 = np.broadcast_to(np.asarray(n0, dtype=float), points_shape(n0, n1, d, v) + (3,))
     res = shade_closures(params, n0, n1, d, v, plan, wavelengths)
     return evaluate_closures(res, n0, v, l, plan.lobe, ng)

@@ -84,6 +84,29 @@ def _stratified(count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return np.clip(u1, 1e-6, 1.0 - 1e-6), u2
 
 
+def closures_shape(result, n0: np.ndarray) -> tuple:
+    """The shape of the closures' points, the vector axis left out: the normals' (P,), grown
+    by a stack's leading axis where a closure's values have one."""
+    shapes = [n0.shape[:-1]]
+    for cl in result.glossy:
+        shapes += [np.shape(x) for x in (*cl.weight, cl.exponent, cl.alpha, cl.anisotropy)]
+        shapes += [np.shape(x)[:-1] for x in (cl.normal, cl.tangent)]
+    shapes += [np.shape(x) for x in result.diffuse or ()]
+    return np.broadcast_shapes(*shapes)
+
+
+def lobe_of(closure, shape: tuple, lobe_kind: str) -> tuple:
+    """What a glossy closure's integral depends on besides the view, broadcast to the points'
+    ``shape``: its normal and exponent (Phong), or its normal, alpha, anisotropy and tangent
+    (Beckmann; the tangent None when it has none)."""
+    def each(x, vector=False):
+        return None if x is None else np.broadcast_to(np.asarray(x, dtype=float), shape + ((3,) if vector else ()))
+
+    if lobe_kind == "phong":
+        return each(closure.normal, True), each(closure.exponent)
+    return each(closure.normal, True), each(closure.alpha), each(closure.anisotropy), each(closure.tangent, True)
+
+
 @dataclass
 class Environment:
     """An equirectangular HDRI as the world's only light; ``image`` (H, W, 3) linear, bottom
@@ -155,30 +178,52 @@ class Environment:
     def shade(self, result, n0: np.ndarray, v: np.ndarray, lobe_kind: str = "beckmann", ng=None,
               bump_correction: bool = True) -> np.ndarray:
         """The pixels (P, 3) of the closures ``result`` (the shading program's, at normals
-        ``n0`` and views ``v``) under this environment, as Cycles integrates them."""
+        ``n0`` (P, 3) and views ``v``) under this environment, as Cycles integrates them.  The
+        closures of a stack of K parameter sets (:func:`.cycles_closures.stacked_values`:
+        values with a leading axis K) give (K, P, 3), each lobe integrated once however many
+        sets share it (:meth:`_stacked_lobe`)."""
         n0 = np.asarray(n0, dtype=float)
         v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
-        out = np.zeros(n0.shape[:-1] + (3,))
+        shape = closures_shape(result, n0)
+        out = np.zeros(shape + (3,))
         for cl in result.glossy:
-            w = np.maximum(np.stack([np.broadcast_to(x, n0.shape[:-1]) for x in cl.weight], axis=-1), 0.0)
+            w = np.maximum(np.stack([np.broadcast_to(x, shape) for x in cl.weight], axis=-1), 0.0)
             keep = w.mean(axis=-1) >= CLOSURE_WEIGHT_CUTOFF
             if not np.any(keep):
                 continue
-            N = safe_normalize(np.broadcast_to(np.asarray(cl.normal, dtype=float), n0.shape), n0)
-            if bump_correction and ng is not None:
-                N = np.where(np.all(N == ng, axis=-1, keepdims=True), N, ensure_valid_specular_reflection(ng, v, N))
-            if lobe_kind == "phong":
-                val = self._phong(N, v, np.broadcast_to(np.asarray(cl.exponent, dtype=float), n0.shape[:-1]), n0)
-            else:
-                T = None if cl.tangent is None else np.broadcast_to(np.asarray(cl.tangent, dtype=float), n0.shape)
-                val = self._beckmann(N, v, np.broadcast_to(np.asarray(cl.alpha, dtype=float), n0.shape[:-1]),
-                                     np.broadcast_to(np.asarray(cl.anisotropy, dtype=float), n0.shape[:-1]), T, n0)
+            val = self._stacked_lobe(lobe_kind, lobe_of(cl, shape, lobe_kind), n0, v, ng if bump_correction else None)
             out += np.where(keep[..., None], w * val, 0.0)
         if result.diffuse is not None:
-            col = np.maximum(np.stack([np.broadcast_to(x, n0.shape[:-1]) for x in result.diffuse], axis=-1), 0.0)
+            col = np.maximum(np.stack([np.broadcast_to(x, shape) for x in result.diffuse], axis=-1), 0.0)
             col = np.where((col.mean(axis=-1) >= CLOSURE_WEIGHT_CUTOFF)[..., None], col, 0.0)
             out += col * self.irradiance(n0) / np.pi
         return out
+
+    def _stacked_lobe(self, lobe_kind: str, lobe: tuple, n0, v, ng) -> np.ndarray:
+        """A glossy closure's integral, its weight left out, (P, 3) or for a stack (K, P, 3):
+        once per distinct row of its lobe (:func:`lobe_of`).  Most of a fit's slopes step a
+        parameter that changes a closure's weight alone (a thickness, a base colour), and the
+        integral is most of the work of shading under an environment."""
+        if lobe[0].ndim == 2:
+            return self._lobe(lobe_kind, lobe, n0, v, ng)
+        out = np.empty(lobe[0].shape)
+        first: dict[bytes, int] = {}
+        for k in range(len(out)):
+            row = tuple(None if a is None else a[k] for a in lobe)
+            key = b"".join(np.ascontiguousarray(a).tobytes() for a in row if a is not None)
+            out[k] = out[first[key]] if key in first else self._lobe(lobe_kind, row, n0, v, ng)
+            first.setdefault(key, k)
+        return out
+
+    def _lobe(self, lobe_kind: str, lobe: tuple, n0, v, ng) -> np.ndarray:
+        """One closure's lobe (:func:`lobe_of`, arrays over the points) integrated against the
+        environment, its normal bent as Cycles bends it when ``ng`` is given."""
+        N = safe_normalize(lobe[0], n0)
+        if ng is not None:
+            N = np.where(np.all(N == ng, axis=-1, keepdims=True), N, ensure_valid_specular_reflection(ng, v, N))
+        if lobe_kind == "phong":
+            return self._phong(N, v, lobe[1], n0)
+        return self._beckmann(N, v, lobe[1], lobe[2], lobe[3], n0)
 
     def _beckmann(self, N, v, alpha, aniso, T, n0) -> np.ndarray:
         """Cycles' Beckmann closure (no Fresnel) integrated against the environment."""

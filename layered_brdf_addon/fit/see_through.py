@@ -15,19 +15,24 @@ left out (the film reflects a few percent: under a tenth of a percent of the pix
 """
 from __future__ import annotations
 
+from typing import Mapping
+
 import numpy as np
 
 from ..model import ops_numpy, program
 from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
+from .cycles_closures import program_inputs
 
 
-def base_shader_weight(params: LayeredParams, n0: np.ndarray, v: np.ndarray, plan: EffectPlan) -> np.ndarray:
+def base_shader_weight(params: LayeredParams | Mapping, n0: np.ndarray, v: np.ndarray,
+                       plan: EffectPlan) -> np.ndarray:
     """The Base Shader's factor (P,) at normals ``n0`` seen from ``v``: the shading program's
-    own formulas, chosen as its layered surface chooses them."""
+    own formulas, chosen as its layered surface chooses them.  ``params`` may be the values
+    of a stack of parameter sets (:func:`.cycles_closures.stacked_values`): (K, P) then."""
     if plan.optics == "physical" and not plan.passes:
         return np.zeros(n0.shape[:-1])
-    inputs = program.program_inputs(params.to_dict())
+    inputs = program_inputs(params)
     cos_v = np.clip(np.sum(n0 * v, axis=-1), 0.0, 1.0)
     if plan.optics == "physical":
         w = program.film_transmittance(ops_numpy, ops_numpy.combine(*inputs["r1"]), inputs["r0"],
@@ -35,7 +40,8 @@ def base_shader_weight(params: LayeredParams, n0: np.ndarray, v: np.ndarray, pla
                                        inputs["kd"], cos_v, orders=program.harmonic_count(plan))
     else:
         w = program.base_weight(ops_numpy, inputs["r1"], inputs["r0"], cos_v)
-    return np.broadcast_to(np.asarray(w, dtype=float), n0.shape[:-1])
+    w = np.asarray(w, dtype=float)
+    return np.broadcast_to(w, np.broadcast_shapes(w.shape, n0.shape[:-1]))
 
 
 def far_side(n0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -47,12 +53,12 @@ def far_side(n0: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return exit_point, -exit_point
 
 
-def see_through(params: LayeredParams, plan: EffectPlan, n0, v, shade_side, background) -> np.ndarray:
-    """What a transparent base adds to the front's pixels (P, 3): ``shade_side(n0, p_object)``
-    shades the film at the far side (normals facing the ray), ``background`` (3,) is the world
-    straight behind."""
+def see_through(params: LayeredParams | Mapping, plan: EffectPlan, n0, v, far, background) -> np.ndarray:
+    """What a transparent base adds to the front's pixels (P, 3): ``far`` (P, 3) is the film
+    shaded at the far side (:func:`far_side`: normals facing the ray, seen along the same
+    view), ``background`` (3,) the world straight behind.  For the values of a stack of
+    parameter sets (:func:`base_shader_weight`), ``far`` and the result are (K, P, 3)."""
     v = np.broadcast_to(v, n0.shape)
     w_front = base_shader_weight(params, n0, v, plan)
-    p_far, n_far = far_side(n0, v)
-    w_back = base_shader_weight(params, n_far, v, plan)
-    return w_front[:, None] * (shade_side(n_far, p_far) + w_back[:, None] * np.asarray(background)[None, :])
+    w_back = base_shader_weight(params, far_side(n0, v)[1], v, plan)
+    return w_front[..., None] * (far + w_back[..., None] * np.asarray(background))

@@ -6,6 +6,11 @@ the starts are the best few of a coarse scan over the mean thickness (the range'
 width kept), plus the start itself.  Each runs ``scipy.optimize.least_squares`` (trust
 region, bounds from the parameter table, ``soft_l1`` loss: a few pixels the model cannot
 reach, a clipped highlight or a speck, do not pull the fit), and the best result wins.
+
+The slopes are scipy's forward differences, but the parameter sets of a Jacobian's columns
+(and the scan's candidates) are evaluated together: a sphere target shades them in one run
+of the shading program (``SphereTarget.predict_many``), whose numpy backend repeats the
+Python work of its many small steps on every run, however few the points.
 """
 from __future__ import annotations
 
@@ -25,6 +30,7 @@ SCAN_HALF_WIDTHS = (0.1, 0.4)  # relative half-widths of the range scanned, besi
 LOSS_SCALE = 2.0  # CIELAB units where soft_l1 turns from quadratic to linear
 GOOD_ENOUGH = 0.5  # mean CIEDE2000 below which no further start is tried (about a just-noticeable difference)
 X_SCALE = 1.0
+DIFF_STEP = 1e-3  # the slopes' forward-difference step, relative to the parameter (scipy's ``diff_step``)
 START_MARGIN = 0.05  # a start this far inside the bounds (of their width)
 
 
@@ -43,7 +49,8 @@ class FitResult:
 
 
 class _Objective:
-    """Residuals of a target at a parameter vector, counting evaluations and keeping the best."""
+    """Residuals of a target at parameter vectors, counting evaluations; the slopes by forward
+    differences, every column's parameters evaluated together."""
 
     def __init__(self, target, free: FreeParameters, progress, should_stop):
         self.target, self.free = target, free
@@ -52,21 +59,63 @@ class _Objective:
         self.colours = colour_rows(target, free.base)
         self.progress, self.should_stop = progress, should_stop
         self.evaluations = 0
+        self.bounds = free.bounds()
+        self._last = None  # (x, residuals) of the last single evaluation: the slopes start there
 
     def features(self, params: LayeredParams) -> np.ndarray:
         return np.nan_to_num(model_features(self.target, params), nan=0.0, posinf=1e3, neginf=-1e3)
 
-    def __call__(self, x) -> np.ndarray:
+    def _count(self) -> None:
+        """One evaluation more: the caller may stop the fit, and hears how far it is."""
         if self.should_stop is not None and self.should_stop():
             raise FitCancelled()
         self.evaluations += 1
         if self.progress is not None:
             self.progress(self.evaluations)
-        return ((self.features(self.free.params(x)) - self.observed) * self.weights).ravel()
+
+    def residuals(self, xs: Sequence[np.ndarray]) -> np.ndarray:
+        """(K, rows): the residuals at each of ``K`` vectors, their parameters evaluated
+        together where the target can (:func:`model_features_many`)."""
+        params = []
+        for x in xs:
+            self._count()
+            params.append(self.free.params(x))
+        feats = np.nan_to_num(model_features_many(self.target, params), nan=0.0, posinf=1e3, neginf=-1e3)
+        return ((feats - self.observed) * self.weights).reshape(len(params), -1)
+
+    def __call__(self, x) -> np.ndarray:
+        r = self.residuals([x])[0]
+        self._last = (np.array(x, dtype=float), r)
+        return r
+
+    def jacobian(self, x) -> np.ndarray:
+        """The residuals' slopes at ``x``: scipy's 2-point forward differences (its steps,
+        turned back at a bound), the columns' vectors evaluated together.  ``x`` is where
+        the optimiser last evaluated the residuals (they are reused), else they are evaluated."""
+        x = np.asarray(x, dtype=float)
+        f0 = self._last[1] if self._last is not None and np.array_equal(self._last[0], x) else self(x)
+        h = difference_steps(x, *self.bounds)
+        xs = [x + np.where(np.arange(x.size) == i, h, 0.0) for i in range(x.size)]
+        dx = np.array([xi[i] - x[i] for i, xi in enumerate(xs)])
+        return ((self.residuals(xs) - f0) / dx[:, None]).T
 
     def mean_delta_e(self, params: LayeredParams) -> float:
         c = self.colours
         return float(np.mean(colour_space.delta_e_2000(self.features(params)[c], self.observed[c])))
+
+
+def difference_steps(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The forward-difference steps of scipy's ``least_squares(diff_step=DIFF_STEP)``:
+    ``DIFF_STEP |x|`` signed as ``x`` (a zero step becomes ``sqrt(eps) max(1, |x|)``), turned
+    back where it would leave the bounds, shortened to the farther bound where neither way fits."""
+    sign = np.where(x >= 0, 1.0, -1.0)
+    h = DIFF_STEP * sign * np.abs(x)
+    h = np.where((x + h) - x == 0, np.finfo(float).eps ** 0.5 * sign * np.maximum(1.0, np.abs(x)), h)
+    below, above = x - lo, hi - x
+    fitting = np.abs(h) <= np.maximum(below, above)
+    h = np.where(((x + h < lo) | (x + h > hi)) & fitting, -h, h)
+    h = np.where(~fitting & (above >= below), above, h)
+    return np.where(~fitting & (above < below), -below, h)
 
 
 def _lab(target, rgb) -> np.ndarray:
@@ -81,6 +130,14 @@ def model_features(target, params: LayeredParams) -> np.ndarray:
     if hasattr(target, "features"):
         return target.features(params)
     return _lab(target, target.predict(params))
+
+
+def model_features_many(target, params_list: Sequence[LayeredParams]) -> np.ndarray:
+    """(K, rows, 3): :func:`model_features` of each parameter set, in one go where the target
+    has ``features_many`` (a sphere target shades them in one run of the program)."""
+    if hasattr(target, "features_many"):
+        return target.features_many(params_list)
+    return np.stack([model_features(target, p) for p in params_list])
 
 
 def features_observed(target, params: LayeredParams) -> np.ndarray:
@@ -116,7 +173,8 @@ def thickness_starts(objective: _Objective, start: LayeredParams, count: int) ->
         half = min(max((hi - lo) / max(hi + lo, 1e-9), 0.0), 0.9)
         halves = sorted({round(half, 3), *SCAN_HALF_WIDTHS})
         candidates = [start.replace(d_min=m * (1 - h), d_max=m * (1 + h)) for h in halves for m in mids]
-    losses = np.array([_soft_l1(objective(objective.free.vector(p, START_MARGIN))) for p in candidates])
+    losses = np.array([_soft_l1(r) for r in objective.residuals([objective.free.vector(p, START_MARGIN)
+                                                                 for p in candidates])])
     n = len(mids)
     minima = [i for i in range(len(candidates))
               if (i % n == 0 or losses[i] <= losses[i - 1]) and (i % n == n - 1 or losses[i] <= losses[i + 1])]
@@ -150,8 +208,9 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     firsts = thickness_starts(objective, start, starts) if {"d_min", "d_max"} & set(names) else [start]
     best, best_de, tried = None, np.inf, []
     for first in firsts:
-        sol = least_squares(objective, free.vector(first, START_MARGIN), bounds=(lo, hi), loss="soft_l1", f_scale=LOSS_SCALE,
-                            x_scale=X_SCALE, diff_step=1e-3, max_nfev=steps_per_start)
+        sol = least_squares(objective, free.vector(first, START_MARGIN), jac=objective.jacobian, bounds=(lo, hi),
+                            loss="soft_l1", f_scale=LOSS_SCALE, x_scale=X_SCALE,
+                            max_nfev=steps_per_start)
         params = free.params(sol.x)
         de = objective.mean_delta_e(params)
         tried.append((first.d_min, first.d_max, de))

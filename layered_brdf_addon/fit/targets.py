@@ -12,15 +12,23 @@ from typing import Sequence
 
 import numpy as np
 
+from ..model import program
+from ..model.ops_numpy import NoiseUnavailable, ShadingPoint
 from ..model.params import LayeredParams
+from ..model.plan import EffectPlan
 from ..model.policy import plan_effects
-from ..model.sphere import OrthoCamera, Sun, lower_normal, sphere_geometry, thickness_field
+from ..model.sphere import OrthoCamera, Sun, sphere_geometry
 from . import colour_space
-from .cycles_closures import closure_shading, shade_closures
+from .cycles_closures import closure_shading, shade_closures, stack_key, stacked_values
 from .environment import Environment
-from .see_through import see_through
+from .see_through import far_side, see_through
 
 
+# A sphere is black when fewer of its pixels than this are lit in every view.  Not "no pixel":
+# under an HDRI, Cycles' samples that graze the silhouette see the world behind, and a black
+# material's rim holds a few pixels of 1/256 of the background (measured: 10 of 7,200 at
+# 96 px, 256 samples).  A lobe's tails light far more of the sphere than this.
+LIT_FRACTION = 0.01
 GROUP_BINS = 6  # pixels seen alike: sixths of the half-vector's angle and of the view's cosine
 
 # Where Blender's Noise Texture (scale 4, roughness 0.5) puts its value over a sphere, measured
@@ -32,6 +40,10 @@ NOISE_QUANTILES = {0.0: (0.238, 0.290, 0.325, 0.393, 0.471, 0.560, 0.641, 0.687,
                    8.0: (0.340, 0.379, 0.401, 0.440, 0.487, 0.537, 0.581, 0.606, 0.648)}
 NOISE_MEDIAN = 0.485
 NOISE_LEVELS = 7  # thickness levels a noise's colours are averaged over
+# Parameter sets shaded by one run of the program: each adds every sampled pixel to each of
+# the run's temporaries (16 sets of 1,500 pixels: arrays of 600 kB, twice that through a
+# transparent base, whose far side is shaded too).
+STACK_SETS = 16
 
 
 def noise_levels(detail: float) -> np.ndarray:
@@ -88,10 +100,11 @@ class SphereTarget:
         obs = np.concatenate([p["observed"] for p in self._points])
         if not np.all(np.isfinite(obs)):
             raise TargetError("the target's pixels hold NaN or infinite values")
-        if float(colour_space.luminance(obs).max(initial=0.0)) <= 0.0:
+        if max(p["lit"] for p in self._points) < LIT_FRACTION:
             raise TargetError("the target's sphere is black: there is nothing to fit")
         self.observed = obs
         self.white_y = colour_space.white_of(obs)
+        self._batches = light_batches(self._points)
 
     @staticmethod
     def _sample(view: SphereView, count: int) -> dict:
@@ -111,11 +124,25 @@ class SphereTarget:
         pick = np.sort(np.concatenate([bright, rest[::step][: count - bright.size]]))
         r, c = rows[pick], cols[pick]
         return {"view": view, "rows": r, "cols": c, "observed": rgb[pick], "n0": geo.n0[r, c],
-                "p_object": geo.p_object[r, c], "v": geo.view}
+                "p_object": geo.p_object[r, c], "v": geo.view, "lit": float(np.mean(y > 0.0))}
 
     def predict(self, params: LayeredParams) -> np.ndarray:
         """The sampled pixels' colours (for a noise thickness: at the pattern's median)."""
-        return np.concatenate([self._predict_points(params, p) for p in self._points])
+        return self.predict_many([params])[0]
+
+    def predict_many(self, params_list: Sequence[LayeredParams]) -> np.ndarray:
+        """(K, N, 3): :meth:`predict` for each of ``K`` parameter sets, the sets that can share
+        a run of the program (:func:`.cycles_closures.stack_key`) shaded together,
+        :data:`STACK_SETS` at a time (a fit's slopes: one set per free parameter, each a step
+        away from the same point)."""
+        out = np.empty((len(params_list),) + self.observed.shape)
+        for plan, indices in by_stack(params_list):
+            for start in range(0, len(indices), STACK_SETS):
+                chunk = indices[start:start + STACK_SETS]
+                for batch in self._batches:
+                    shaded = shade_points(batch, [params_list[i] for i in chunk], plan)
+                    out[np.ix_(chunk, batch["rows"])] = np.broadcast_to(shaded, (len(chunk), len(batch["rows"]), 3))
+        return out
 
     def matches_statistics(self, params: LayeredParams) -> bool:
         """Whether ``params`` put the thickness in a noise pattern: numpy does not evaluate
@@ -130,8 +157,14 @@ class SphereTarget:
         thickness levels (:func:`noise_levels`)."""
         if not self.matches_statistics(params):
             return colour_space.lab(self.predict(params), self.white_y)
-        lab = np.concatenate([self._levels_lab(params, p) for p in self._points])
-        return self._group_stats(lab, np.full(NOISE_LEVELS, 1.0 / NOISE_LEVELS))
+        return self._group_stats(self._levels_lab(params), np.full(NOISE_LEVELS, 1.0 / NOISE_LEVELS))
+
+    def features_many(self, params_list: Sequence[LayeredParams]) -> np.ndarray:
+        """(K, rows, 3): :meth:`features` for each of ``K`` parameter sets; the sets matched
+        pixel by pixel shaded together (:meth:`predict_many`)."""
+        if any(self.matches_statistics(p) for p in params_list):
+            return np.stack([self.features(p) for p in params_list])
+        return colour_space.lab(self.predict_many(params_list), self.white_y)
 
     def observed_features(self, params: LayeredParams) -> np.ndarray:
         obs = colour_space.lab(self.observed, self.white_y)
@@ -150,13 +183,14 @@ class SphereTarget:
         """The rows of :meth:`features` that are colours (a CIEDE2000 reads them)."""
         return slice(None) if not self.matches_statistics(params) else slice(0, self._group_count())
 
-    def _levels_lab(self, params: LayeredParams, pts: dict) -> np.ndarray:
-        """(N, levels, 3): the pixels' colours at each of the noise's thickness levels."""
-        out = []
-        for u in noise_levels(params.noise_detail):
-            d = np.full(len(pts["n0"]), params.d_min + (params.d_max - params.d_min) * u)
-            out.append(colour_space.lab(self._shade(params, pts, d), self.white_y))
-        return np.stack(out, axis=1)
+    def _levels_lab(self, params: LayeredParams) -> np.ndarray:
+        """(N, levels, 3): the pixels' colours at each of the noise's thickness levels, the
+        levels shaded together (a stack of thicknesses, one row per level)."""
+        u = noise_levels(params.noise_detail)[:, None]
+        rgb = np.empty((len(u),) + self.observed.shape)
+        for batch in self._batches:
+            rgb[:, batch["rows"]] = shade_points(batch, [params], plan_effects(params), noise_at=u)
+        return np.swapaxes(colour_space.lab(rgb, self.white_y), 0, 1)
 
     def _groups(self) -> np.ndarray:
         """Each sampled pixel's group: its view, and the sixths of the angle between its
@@ -199,37 +233,6 @@ class SphereTarget:
         std = np.sqrt(np.maximum(moment(lab ** 2) - mean ** 2, 0.0))
         return np.concatenate([mean, std])
 
-    @staticmethod
-    def _predict_points(params: LayeredParams, pts: dict) -> np.ndarray:
-        field_ = thickness_field(params)
-        if field_ is None:  # a noise: its median thickness everywhere
-            d = np.full(len(pts["n0"]), params.d_min + (params.d_max - params.d_min) * NOISE_MEDIAN)
-        else:
-            d = field_(pts["p_object"])
-        return SphereTarget._shade(params, pts, d)
-
-    @staticmethod
-    def _shade(params: LayeredParams, pts: dict, d: np.ndarray) -> np.ndarray:
-        view, plan, v = pts["view"], plan_effects(params), pts["v"]
-
-        def side(n0, p_object, d):
-            n1 = lower_normal(params, n0, p_object, d)
-            if view.environment is not None:
-                closures = shade_closures(params, n0, n1, d, v, plan)
-                return view.environment.shade(closures, n0, v, plan.lobe, ng=n0)
-            return view.sun.strength * closure_shading(params, n0, n1, d, view.sun.l, v, ng=n0, plan=plan)
-
-        front = side(pts["n0"], pts["p_object"], d)
-        if params.base_layer != "transparent":
-            return front
-        field_ = thickness_field(params)  # None for a noise: the far side at the same level
-
-        def far(n_far, p_far):
-            return side(n_far, p_far, d if field_ is None else field_(p_far))
-
-        background = np.zeros(3) if view.environment is None else view.environment.radiance(-np.asarray(v))
-        return front + see_through(params, plan, pts["n0"], v, far, background)
-
     def render(self, params: LayeredParams, view: int = 0) -> np.ndarray:
         """The whole image of view ``view`` for ``params`` (the fitted sphere only)."""
         v = self.views[view]
@@ -237,12 +240,102 @@ class SphereTarget:
         rows, cols = np.nonzero(geo.sphere == v.sphere)
         pts = {"view": v, "n0": geo.n0[rows, cols], "p_object": geo.p_object[rows, cols], "v": geo.view}
         out = np.zeros(geo.mask.shape + (3,))
-        out[rows, cols] = self._predict_points(params, pts)
+        [batch] = light_batches([pts])
+        out[rows, cols] = shade_points(batch, [params], plan_effects(params))
         return out
 
     def mask(self, view: int = 0) -> np.ndarray:
         v = self.views[view]
         return sphere_geometry(v.camera, v.centers).sphere == v.sphere
+
+
+def light_batches(points: Sequence[dict]) -> list[dict]:
+    """The sampled pixels of the views as shading points, one set per light: every sun's views
+    together (:func:`shading_points`), so that one run of the program shades them all (a run
+    per view would repeat the Python work of its many small steps), and each environment's
+    view on its own.  ``rows``: where a set's colours go among the target's; ``background``:
+    the world straight behind its pixels (what a transparent base lets through)."""
+    starts = np.cumsum([0] + [len(p["n0"]) for p in points])
+    rows = [np.arange(a, b) for a, b in zip(starts[:-1], starts[1:])]
+    suns = [k for k, p in enumerate(points) if p["view"].environment is None]
+    batches = []
+    if suns:
+        batches.append(dict(shading_points([points[k] for k in suns]), rows=np.concatenate([rows[k] for k in suns]),
+                            background=np.zeros(3)))
+    return batches + [dict(shading_points([p]), rows=rows[k], environment=p["view"].environment,
+                           background=p["view"].environment.radiance(-np.asarray(p["v"], dtype=float)))
+                      for k, p in enumerate(points) if p["view"].environment is not None]
+
+
+def shading_points(points: Sequence[dict]) -> dict:
+    """Views' sampled pixels as one set of shading points: per point its normal, object-space
+    position and view, and under a sun the sun's direction and strength."""
+    def each(value, pts):
+        return np.broadcast_to(np.asarray(value, dtype=float), pts["n0"].shape)
+
+    out = {"n0": np.concatenate([p["n0"] for p in points]),
+           "p_object": np.concatenate([p["p_object"] for p in points]),
+           "v": np.concatenate([each(p["v"], p) for p in points])}
+    if all(p["view"].sun is not None for p in points):
+        out["l"] = np.concatenate([each(p["view"].sun.l, p) for p in points])
+        out["strength"] = np.concatenate([np.full((len(p["n0"]), 1), float(p["view"].sun.strength)) for p in points])
+    return out
+
+
+def both_sides(points: dict) -> dict:
+    """A set of shading points followed by the far side of the sphere behind each
+    (:func:`.see_through.far_side`), seen along the same view under the same light: one run
+    of the program shades the film where the camera ray enters and where it leaves."""
+    p_far, n_far = far_side(points["n0"], points["v"])
+    twice = {k: np.concatenate([points[k], points[k]]) for k in ("v", "l", "strength") if k in points}
+    return {**points, **twice, "n0": np.concatenate([points["n0"], n_far]),
+            "p_object": np.concatenate([points["p_object"], p_far])}
+
+
+def by_stack(params_list: Sequence[LayeredParams]) -> list[tuple[EffectPlan, list[int]]]:
+    """The parameter sets' indices grouped by what one run of the program needs them to share
+    (:func:`.cycles_closures.stack_key`), in order of first appearance, with their plan."""
+    groups: dict[tuple, list[int]] = {}
+    for i, p in enumerate(params_list):
+        groups.setdefault(stack_key(p), []).append(i)
+    return [(key[0], indices) for key, indices in groups.items()]
+
+
+def shade_points(points: dict, params_list: Sequence[LayeredParams], plan: EffectPlan,
+                 noise_at=NOISE_MEDIAN) -> np.ndarray:
+    """The colours of a set of :func:`light_batches` under its light for parameter sets of one
+    stack (:func:`.cycles_closures.stacked_values`, their ``plan``): (N, 3) for one set,
+    (K, N, 3) for K sets that differ.  A transparent base adds the far side of the sphere,
+    shaded in the same run (:func:`both_sides`), and the background behind it."""
+    values = stacked_values(params_list)
+    if values["base_layer"] != "transparent":
+        return shade_film(points, values, plan, noise_at)
+    n = len(points["n0"])
+    shaded = shade_film(both_sides(points), values, plan, noise_at)
+    front, far = shaded[..., :n, :], shaded[..., n:, :]
+    return front + see_through(values, plan, points["n0"], points["v"], far, points["background"])
+
+
+def shade_film(points: dict, values: dict, plan: EffectPlan, noise_at=NOISE_MEDIAN) -> np.ndarray:
+    """The film's colours at a set of shading points under its light (what it reflects, no
+    see-through), in one run of the program for the stacked ``values``.  ``noise_at``: the
+    noise's value where the thickness is a noise pattern, which numpy does not evaluate (its
+    median; a column of levels makes a stack of its own, one row per level, for one set)."""
+    pt = ShadingPoint(values, points["n0"], points["v"], points["p_object"])
+    P = program.clamped_inputs(pt)
+    if plan.thickness == "noise":
+        u = np.broadcast_to(noise_at, np.broadcast_shapes(np.shape(noise_at), (len(points["n0"]),)))
+        d = values["d_min"] + (values["d_max"] - values["d_min"]) * u
+    else:
+        d = program.layer_thickness(pt, P, pt.object_position(), plan)
+    try:
+        n1 = program.lower_normal(pt, P, pt.shading_normal(), pt.object_position(), d, plan)
+    except NoiseUnavailable:
+        raise ValueError("normal_mode 'correlated' with the noise pattern needs the render's lower normal") from None
+    n0, v = points["n0"], points["v"]
+    if points.get("environment") is not None:
+        return points["environment"].shade(shade_closures(values, n0, n1, d, v, plan), n0, v, plan.lobe, ng=n0)
+    return points["strength"] * closure_shading(values, n0, n1, d, points["l"], v, ng=n0, plan=plan)
 
 
 CHANNELS = {"r": 0, "g": 1, "b": 2, "red": 0, "green": 1, "blue": 2}
