@@ -26,6 +26,7 @@ from layered_brdf_addon.blender import scene as S  # noqa: E402
 from layered_brdf_addon.blender.fit_operator import run_fit  # noqa: E402
 from layered_brdf_addon.blender.material import apply_layered_material  # noqa: E402
 from layered_brdf_addon.fit import colour_space  # noqa: E402
+from layered_brdf_addon.fit.environment import DEFAULT_HDRIS  # noqa: E402
 from layered_brdf_addon.model.presets import preset  # noqa: E402
 from report import table  # noqa: E402  (benchmarks/ is on sys.path when the script runs)
 
@@ -63,11 +64,12 @@ def ball_delta_e(principled: np.ndarray, layered: np.ndarray, empty: np.ndarray)
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--hdris", nargs="+", default=["forest.exr", "courtyard.exr", "interior.exr"])
+    ap.add_argument("--hdris", nargs="+", default=["forest", "courtyard", "interior", "sunset", "city"])
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--samples", type=int, default=64)
-    ap.add_argument("--fit-hdris", nargs="*", default=[],
-                    help="HDRIs whose reference-sphere renders join the three suns' in the fit")
+    ap.add_argument("--fit-hdris", nargs="*", default=list(DEFAULT_HDRIS),
+                    help="HDRIs whose reference-sphere renders join the three suns' in the fit (default: the "
+                         "fit command's, " + " ".join(DEFAULT_HDRIS) + "; none: the suns only)")
     ap.add_argument("--only", nargs="*", default=list(CONVERSIONS))
     ap.add_argument("--sheet", help="also write a PNG: per material, the Principled and the fitted ball "
                                     "under each HDRI")
@@ -82,9 +84,9 @@ def main(argv=None) -> None:
             make, start = CONVERSIONS[name]
             material = make()
             views = P.principled_views_of(material, hdris=[lookdev.hdri_path(h) for h in args.fit_hdris])
-            t0 = time.perf_counter()
+            t0, cpu0 = time.perf_counter(), time.process_time()
             result = run_fit(views, P.start_for(preset(start), material))
-            seconds = time.perf_counter() - t0
+            seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
             import bpy
 
             layered = apply_layered_material(bpy.data.materials.new(f"{name} fitted"), result.params)
@@ -95,8 +97,11 @@ def main(argv=None) -> None:
                 errors.append(ball_delta_e(a, b, empties[h]))
                 tiles += [a, b]
             sheet_rows.append(np.concatenate(tiles, axis=1))
-            rows.append((name, start, f"{result.mean_delta_e:.2f}", *(f"{e:.2f}" for e in errors), f"{seconds:.0f}"))
-    header = ("material", "start", "ΔE00 fitted (three suns)", *(f"ΔE00 ball, {h}" for h in args.hdris), "fit s")
+            rows.append((name, start, f"{result.mean_delta_e:.2f}", *(f"{e:.2f}" for e in errors),
+                         f"{cpu:.0f} / {seconds:.0f}"))
+    lights = "three suns" + "".join(f" + {h}" for h in args.fit_hdris)
+    header = ("material", "start", f"ΔE00 fitted ({lights})", *(f"ΔE00 ball, {h}" for h in args.hdris),
+              "fit CPU / wall s")
     print(table(header, rows, args.markdown))
     if args.sheet:
         save_sheet(Path(args.sheet), np.concatenate(sheet_rows, axis=0))

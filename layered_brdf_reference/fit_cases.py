@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from layered_brdf_addon.fit.cycles_closures import closure_shading
-from layered_brdf_addon.fit.targets import SphereView
+from layered_brdf_addon.fit.targets import SphereTarget, SphereView
 from layered_brdf_addon.model.presets import preset
 from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
 
@@ -34,9 +34,14 @@ def held_out() -> dict:
 
 
 def views_of(params, suns=SUNS[:1]) -> list[SphereView]:
-    """The closure form's images of ``params`` on the reference sphere, one per sun."""
-    return [SphereView(render_spheres(params, CAMERA, sun, shading=closure_shading)[0], CAMERA, sun)
-            for sun in suns]
+    """The closure form's images of ``params`` on the reference sphere, one per sun; with a
+    transparent base, what the fit's model sees through the sphere too (its far side)."""
+    views = [SphereView(render_spheres(params, CAMERA, sun, shading=closure_shading)[0], CAMERA, sun)
+             for sun in suns]
+    if params.base_layer != "transparent":
+        return views
+    target = SphereTarget(views)
+    return [SphereView(target.render(params, k), CAMERA, view.sun) for k, view in enumerate(views)]
 
 
 def image_delta_e(target, params) -> float:

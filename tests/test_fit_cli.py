@@ -440,7 +440,9 @@ def principled_blend(tmp_path_factory) -> Path:
     return path
 
 
-PRINCIPLED_DELTA_E = 3.0  # a Principled BSDF is no layered material: measured 1.8 and 2.2
+# A Principled BSDF is no layered material: measured 1.80 (titanium) and 3.06 (pearl) over the
+# three suns and forest.exr (1.8 and 2.2 under the suns alone).
+PRINCIPLED_DELTA_E = 3.5
 
 
 @pytest.mark.slow
