@@ -276,6 +276,26 @@ def test_render_on_an_object_of_a_blend(tmp_path, blend_file):
     assert np.abs(png - own).max() <= 1
 
 
+@pytest.mark.slow
+def test_the_sidecar_reports_the_plan_a_keyframed_material_was_built_with(tmp_path):
+    path = tmp_path / "animated.blend"
+    code = ("import bpy\nbpy.ops.wm.read_factory_settings(use_empty=False)\n"
+            "r = bpy.context.scene.render\nr.resolution_x, r.resolution_y = 32, 24\n"
+            "from layered_brdf_addon.blender.material import apply_layered_material, param_socket, shader_node\n"
+            "from layered_brdf_addon.model import preset\n"
+            "mat = apply_layered_material(bpy.data.objects['Cube'], preset('oil_slick').replace(kd=0.0))\n"
+            "sock, _ = param_socket(shader_node(mat), 'kd')\n"
+            "sock.keyframe_insert('default_value', frame=1)\n"
+            "sock.default_value = 0.5\nsock.keyframe_insert('default_value', frame=20)\n"
+            f"bpy.ops.wm.save_as_mainfile(filepath={str(path)!r})\n")
+    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=TIMEOUT)
+    res = run_cli("render", "--blend", path, "--object", "Cube", "--preset", "oil_slick", "--kd", 0, "--samples", 1,
+                  "--output", tmp_path / "cube", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    # kd is 0 on this frame, but keyframed: the diffuse part stays in the shader, and the sidecar says so.
+    assert read_sidecar(tmp_path / "cube.json")["plan"]["diffuse"] is True
+
+
 def blender_encoding(exr: Path, view: dict, png: Path) -> np.ndarray:
     """Blender's own 8-bit encoding of the EXR's beauty with the view settings ``view``: the
     file loaded as an image and saved as a render PNG from a scene with those settings."""

@@ -1,6 +1,6 @@
 """White furnace: under a uniform white world, each preset's rendered albedo equals the
-closure form's, integrated by Monte Carlo in numpy (docs/energy.md says by how much the
-model itself exceeds 1)."""
+closure form's, integrated by Monte Carlo in numpy (docs/physical-optics.md, "White furnace
+with every base layer", says by how much the model itself exceeds 1)."""
 import numpy as np
 import pytest
 

@@ -230,7 +230,7 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
         import bpy
 
         from ..blender import scene as S
-        from ..blender.material import apply_layered_material
+        from ..blender.material import animated_parameters, apply_layered_material
 
         guard.arm()
         guard.check()
@@ -248,10 +248,12 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
             camera_info, sun_info = camera_to_dict(camera), sun_to_dict(sun)
         guard.arm()
         guard.check()
-        apply_layered_material(target, req.params, req.backend)
+        material = apply_layered_material(target, req.params, req.backend)
         guard.check()
         paths = req.paths
-        plan = plan_effects(req.params)
+        # The plan the material was built with: a --blend material's keyframes, drivers and linked
+        # sockets keep the effects they may switch on.
+        plan = plan_effects(req.params, animated_parameters(material))
 
         def describe(render_seconds: float) -> dict[str, Any]:
             return sidecar(

@@ -2,10 +2,12 @@
 
 Every parameter is a field of :class:`LayeredParams`.  Its metadata (label, unit,
 hard range, soft range, description, enum options, whether it is a shader input)
-is the one place from which the Blender properties, the command-line options, the
-shader sockets and :meth:`LayeredParams.validate` are derived.
+is the one place from which the Blender properties and panels, the node group's sockets
+(names, subtypes, tooltips), the OSL shader's parameters, the command-line options, the
+fit's free parameters and bounds, and :meth:`LayeredParams.validate` are derived.
 
-This module imports numpy only through the standard library; it never imports bpy.
+Plain Python: it imports neither numpy nor bpy (only the standard library and the
+measured media of :mod:`.media`).
 """
 from __future__ import annotations
 
