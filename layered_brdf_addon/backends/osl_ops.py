@@ -85,6 +85,19 @@ class FunctionBody:
     statements: list = field(default_factory=list)
     ret: tuple | None = None  # (kind, expression)
     by_token: dict = field(default_factory=dict)
+    code: object = None  # the code of the Python function this body is written from
+    frame: object = None  # that function's frame, once it has made a statement
+
+    def note_frame(self) -> None:
+        """Keep the frame of the function being written, found on the stack the first time it
+        makes a statement: once the function returns, its frame still holds its locals, and
+        the OSL names its variables after them."""
+        if self.frame is not None or self.code is None:
+            return
+        frame = sys._getframe(2)
+        while frame is not None and frame.f_code is not self.code:
+            frame = frame.f_back
+        self.frame = frame
 
 
 _DECL = {"float": "float", "vector": "vector", "int": "int"}
@@ -112,6 +125,7 @@ class OslOps:
         return self._count
 
     def emit(self, kind: str, expr: str | None, prec: int = PREC_ATOM, raw: bool = False) -> Val:
+        self.body.note_frame()
         st = Statement(self._new_token(), kind, expr, prec, raw=raw)
         self.body.statements.append(st)
         self.body.by_token[st.token] = st
@@ -124,6 +138,7 @@ class OslOps:
 
     def raw(self, text: str) -> None:
         """A statement of the body that is not a value (a closure sum, say)."""
+        self.body.note_frame()
         st = Statement(self._new_token(), "void", text, raw=True)
         self.body.statements.append(st)
 
@@ -342,7 +357,7 @@ class OslOps:
 
     def _define(self, fn, key, kinds, settings):
         fname = self._function_name(fn, key, settings)
-        body = FunctionBody(fname)
+        body = FunctionBody(fname, code=fn.__code__)
         self._bodies.append(body)
         params = {}
         for pname, kind in kinds:
@@ -512,18 +527,9 @@ def _comment(doc: str) -> str:
 
 
 def _run_capturing_locals(fn, ops, params: dict, settings: dict):
-    """Run ``fn(ops, **params, **settings)``; return its result and its locals at return."""
-    captured = {}
-    code = fn.__code__
-
-    def profiler(frame, event, arg):
-        if event == "return" and frame.f_code is code and not captured:
-            captured.update(frame.f_locals)
-
-    previous = sys.getprofile()
-    sys.setprofile(profiler)
-    try:
-        result = fn(ops, **params, **settings)
-    finally:
-        sys.setprofile(previous)
+    """Run ``fn(ops, **params, **settings)``; return its result and its locals at return (from
+    the frame its first statement noted: :meth:`FunctionBody.note_frame`)."""
+    result = fn(ops, **params, **settings)
+    frame = ops.body.frame
+    captured = dict(frame.f_locals) if frame is not None else {}
     return result, {k: v for k, v in captured.items() if k != "ops" and not (k in params and v is params[k])}

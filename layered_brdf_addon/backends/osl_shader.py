@@ -211,7 +211,7 @@ def shader_source(plan: EffectPlan) -> str:
     ops = ShaderOps()
     from .osl_ops import FunctionBody
 
-    body = FunctionBody(SHADER_NAME)
+    body = FunctionBody(SHADER_NAME, code=program.layered_surface.__code__)
     ops._bodies.append(body)
     res, local_names = _run_capturing_locals(program.layered_surface, ops, {}, {"plan": plan})
     x = res.extras
