@@ -74,3 +74,26 @@ def test_the_shader_names_its_variables_the_same_under_a_profiler():
     finally:
         profiler.disable()
     assert profiled == expected == generated.OSL_FILE.read_text()
+
+
+def test_the_node_groups_stamp_follows_what_they_compute_not_their_docstrings(monkeypatch):
+    """Editing a docstring or a comment leaves every saved group current; a change to the code
+    does not."""
+    from layered_brdf_addon.backends import node_group
+    from layered_brdf_addon.model import program
+
+    before = node_group._output_digest()
+    monkeypatch.setattr(program.schlick.program_step, "__doc__", "Reworded: the OSL comment changes, not the maths.")
+    shader_source.cache_clear()
+    assert "Reworded" in shader_source(generated.default_plan())
+    shader_source.cache_clear()
+    try:
+        assert node_group._output_digest() == before
+    finally:
+        shader_source.cache_clear()
+    code = "def f(x):\n    '''Doc.'''\n    return x + 1  # one\n"
+    reworded = "def f(x):\n    '''Another doc.'''\n    # a comment\n    return x + 1\n"
+    assert node_group.code_without_docs(code) == node_group.code_without_docs(reworded)
+    assert node_group.code_without_docs(code) != node_group.code_without_docs(code.replace("+ 1", "+ 2"))
+    plans = node_group.stamp_plans()
+    assert len({p.key for p in plans}) == len(plans)

@@ -3,10 +3,15 @@
 The group's inputs are ``Normal``, the shader parameters of ``LayeredParams`` (sockets
 named for people, in panels; the base colour one colour socket) and ``Base Shader``; its outputs are ``BSDF``,
 ``Thickness`` (nm), ``Lower Normal`` and ``Upper Normal`` (world space), the last three
-for AOV passes.  Groups are stamped with :data:`NODE_GROUP_VERSION`, a digest of the
-code that shapes them, and their plan; a stale group is rebuilt in place.
+for AOV passes.  Groups are stamped with :data:`NODE_GROUP_VERSION`, a digest of what
+they compute (:func:`_output_digest`), and their plan; a stale group is rebuilt in place.
 """
 from __future__ import annotations
+
+import ast
+import hashlib
+import inspect
+import re
 
 import bpy
 
@@ -15,6 +20,7 @@ from ..model import program
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
 from .node_ops import Expr, NodeOps
+from .osl_shader import shader_source
 
 NODE_GROUP_VERSION = 5  # 5: sockets named for people, in panels; the base colour one colour socket
 GROUP_PREFIX = "Layered BRDF"
@@ -23,14 +29,47 @@ OPEN_PANELS = ("Layer", "Specular", "Diffuse")  # open on a new node; Noise and 
 PLAN_KEY = "layered_brdf_plan"
 
 
-def _source_digest() -> str:
-    """Digest of the code that shapes the groups: any change makes saved groups stale."""
-    import hashlib
-    import inspect
+def stamp_plans() -> list[EffectPlan]:
+    """Plans that together take every branch of the shading program: the full plan, and each
+    of its settings changed one at a time (with thin-film optics for the physical-only ones)."""
+    base = EffectPlan.full().to_dict()
+    variants = {"specular": [False], "diffuse": [False], "thickness": ["height", "constant"],
+                "normals": ["parallel", "tilted"], "dispersion": [False], "interference": [False],
+                "analytic": [True], "spectral": [4, 8, 16, 32], "optics": ["physical"]}
+    plans = [EffectPlan(**base)]
+    plans += [EffectPlan(**{**base, key: value}) for key, values in variants.items() for value in values]
+    physical = {**base, "optics": "physical"}
+    plans += [EffectPlan(**{**physical, "multibeam": True}), EffectPlan(**{**physical, "passes": False}),
+              EffectPlan(**{**base, "analytic": True, "footprint": False})]
+    return plans
 
+
+_COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.S)
+
+
+def code_without_docs(source: str) -> str:
+    """The syntax tree of Python ``source`` without its docstrings (comments are not in it)."""
+    tree = ast.parse(source)
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if isinstance(body, list) and body and isinstance(body[0], ast.Expr) \
+                and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str):
+            node.body = body[1:] or [ast.Pass()]
+    return ast.dump(tree)
+
+
+def _output_digest() -> str:
+    """Digest of what the groups are made of, not of the text that makes them: the shading
+    program's computation for plans that take its every branch (the OSL backend's source of
+    them, comments removed: the same operations the nodes are built from), and the node
+    backend's own code (syntax trees, without docstrings).  Editing a docstring or a comment
+    leaves saved groups current; a change to what is computed, or to how nodes are built
+    from it, makes them stale."""
     h = hashlib.sha1()
-    for mod in (program, inspect.getmodule(NodeOps), inspect.getmodule(_source_digest)):
-        h.update(inspect.getsource(mod).encode())
+    for plan in stamp_plans():
+        h.update(_COMMENT.sub("", shader_source(plan)).encode())
+    for module in (inspect.getmodule(NodeOps), inspect.getmodule(_output_digest)):
+        h.update(code_without_docs(inspect.getsource(module)).encode())
     return h.hexdigest()[:12]
 
 
@@ -40,7 +79,7 @@ _STAMP = None
 def build_stamp() -> str:
     global _STAMP
     if _STAMP is None:
-        _STAMP = f"{NODE_GROUP_VERSION}:{_source_digest()}"
+        _STAMP = f"{NODE_GROUP_VERSION}:{_output_digest()}"
     return _STAMP
 
 
