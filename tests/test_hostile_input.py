@@ -26,7 +26,8 @@ from layered_brdf_addon.model.params import PARAM_SPECS, ParameterError
 
 TIMEOUT = 120
 FAKE_BLEND = b"BLENDER-v500" + b"\x00" * 64  # passes the header check; never rendered here
-DEEP = 10_000
+NESTED = 50  # lists nested this deep are read, then refused value by value
+DEEPER = 400_000  # past what any parser should follow: the whole file is refused
 HUGE_INT = int("9" * 400)
 
 
@@ -56,7 +57,7 @@ def assert_refused(res: subprocess.CompletedProcess, name: str) -> None:
     assert "Traceback" not in res.stderr, res.stderr[-3000:]
 
 
-def deep_json(n: int = DEEP) -> str:
+def deep_json(n: int = NESTED) -> str:
     return "[" * n + "]" * n
 
 
@@ -125,13 +126,32 @@ def test_absurd_defaults_and_top_level_exit_2(tmp_path):
     (tmp_path / "deep.json").write_text('{"jobs": ' + deep_json() + "}")
     res = run_cli("batch", "deep.json", "--output-dir", "out", cwd=tmp_path)
     assert_refused(res, "job[0]")
-    assert "nested 9999 levels deep" in res.stderr
-    (tmp_path / "deeper.json").write_text(deep_json(400_000))  # past what any parser should follow
+    assert "= [[[...]]] is invalid" in res.stderr  # the value cut short
+    (tmp_path / "deeper.json").write_text(deep_json(DEEPER))
     res = run_cli("batch", "deeper.json", "--output-dir", "out", cwd=tmp_path)
     assert_refused(res, "jobfile")
-    (tmp_path / "long.json").write_text('[{"samples": ' + "9" * 5000 + "}, {}]")
-    jobs = load_job_file(tmp_path / "long.json", output_dir=tmp_path / "out")
-    assert "'samples'" in jobs[0].error and jobs[1].request is not None
+    assert "deeper.json" in res.stderr and "nested deeper than can be read" in res.stderr
+    (tmp_path / "long.json").write_text('[{"samples": ' + "9" * 5000 + "}, {}]")  # more digits than int() reads
+    with pytest.raises(ParameterError, match=r"'jobfile' = '.*long\.json'.*an integer too long to read"):
+        load_job_file(tmp_path / "long.json", output_dir=tmp_path / "out")
+    assert files_under(tmp_path / "out") == []
+
+
+UNREADABLE = {"deeper": (deep_json(DEEPER), "nested deeper than can be read"),
+              "long_int": ("9" * 5000, "an integer too long to read")}
+
+
+@pytest.mark.parametrize("kind", sorted(UNREADABLE))
+@pytest.mark.parametrize("fmt", ["json", "toml"])
+def test_a_params_file_past_what_the_parsers_read_exits_2_naming_it(tmp_path, fmt, kind):
+    value, why = UNREADABLE[kind]
+    text = '{"ks": 0.5, "d_min": ' + value + "}" if fmt == "json" else "ks = 0.5\nd_min = " + value + "\n"
+    (tmp_path / f"mat.{fmt}").write_text(text)
+    res = run_cli("render", "--params", f"mat.{fmt}", "--resolution", 16, "--output", tmp_path / "out" / "x",
+                  cwd=tmp_path)
+    assert_refused(res, "params")
+    assert f"mat.{fmt}" in res.stderr and "allowed a readable .json or .toml file" in res.stderr, res.stderr
+    assert why in res.stderr and len(res.stderr) < 1000, res.stderr[-3000:]
     assert files_under(tmp_path / "out") == []
 
 

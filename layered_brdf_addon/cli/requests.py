@@ -12,13 +12,10 @@ import math
 import os
 import reprlib
 import stat
-import sys
-import threading
 import tomllib
 from dataclasses import dataclass, field
-from json.scanner import py_make_scanner
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 from ..model import policy
 from ..model.params import LOWER_MEDIA, LOWER_MEDIUM_KEYS, PARAM_SPECS, LayeredParams, ParameterError
@@ -42,8 +39,6 @@ MAX_ITEMS = 16  # items of a list value (sun: 3, resolution: 2)
 MAX_INT_DIGITS = 18  # digits of an integer value
 MAX_NAME = 200  # characters of a name
 MAX_STEM_BYTES = 200  # bytes (UTF-8) of an output stem's file name
-_PARSE_RECURSION = 200_000  # how deep the readers may recurse (values nested ~50,000 deep)
-_PARSE_STACK = 256 << 20  # the stack of the thread that reads a file
 
 _SUN_ALLOWED = ("three finite numbers X Y Z, the direction towards the sun, with a length of at least 1e-9 "
                 "whose square is finite (|X|, |Y|, |Z| below about 1e154)")
@@ -65,19 +60,9 @@ OPTION_ALLOWED = {
 
 
 # ---------------------------------------------------------------------------
-# absurd values: summarised in messages, refused before they reach a validator
-class _LongInteger:
-    """An integer of a JSON file too long to be worth converting (kept as its digits)."""
-
-    def __init__(self, digits: str):
-        self.digits = digits
-
-    def __repr__(self) -> str:
-        return f"<an integer of {len(self.digits.lstrip('-'))} digits>"
-
-
+# values in messages, and values too big for any option
 class _Shown:
-    """A value's summary for an error message (``repr`` gives the summary)."""
+    """A value's short form for an error message: ``repr`` gives it as is (unquoted)."""
 
     def __init__(self, text: str):
         self.text = text
@@ -85,77 +70,27 @@ class _Shown:
     def __repr__(self) -> str:
         return self.text
 
-    __str__ = __repr__
+
+class _ShortRepr(reprlib.Repr):
+    """``reprlib`` cut to a message line: 2 levels, 8 items, 60 characters.  An integer of
+    more digits than any option takes is named, not printed: a screen of digits says
+    less, and Python refuses to print one of over 4300."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.maxlevel, self.maxlist, self.maxtuple, self.maxdict, self.maxstring, self.maxother = 2, 8, 8, 8, 60, 60
+
+    def repr_int(self, x: int, level: int) -> str:
+        return repr(x) if abs(x) < 10 ** MAX_INT_DIGITS else f"<an integer of more than {MAX_INT_DIGITS} digits>"
 
 
-def _int_digits(x: int) -> int:
-    try:
-        return len(str(abs(x)))
-    except ValueError:  # more digits than Python converts
-        return int(abs(x).bit_length() * 0.30103) + 1
-
-
-def _shape(value: Any, limit: int = 100_000) -> tuple[int, int]:
-    """(depth, number of items) of nested lists and tables, without recursion (stops at ``limit`` items)."""
-    depth, count = 0, 0
-    stack = [(value, 0)]
-    while stack and count < limit:
-        v, d = stack.pop()
-        if isinstance(v, (list, tuple)):
-            items = v
-        elif isinstance(v, dict):
-            items = list(v.values())
-        else:
-            continue
-        depth = max(depth, d + 1)
-        count += len(items)
-        stack.extend((x, d + 1) for x in items)
-    return depth, count
-
-
-def _absurd_scalar(value: Any) -> str | None:
-    """Why a scalar is beyond what any option takes, or None."""
-    if isinstance(value, _LongInteger):
-        return repr(value)[1:-1]
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10 ** MAX_INT_DIGITS:
-        return f"an integer of {_int_digits(value)} digits"
-    if isinstance(value, str) and len(value) > MAX_TEXT:
-        return f"a text of {len(value)} characters"
-    return None
-
-
-def _absurd(value: Any) -> str | None:
-    """Why a value is beyond what any option takes (too long, too deep, too big), or None."""
-    if isinstance(value, (list, tuple)):
-        depth, count = _shape(value)
-        if depth > 1:
-            return f"a list nested {depth} levels deep"
-        if count > MAX_ITEMS:
-            return f"a list of {count} items"
-        for x in value:
-            if _absurd_scalar(x):
-                return f"a list holding {_absurd_scalar(x)}"
-        return None
-    if isinstance(value, dict):
-        depth, count = _shape(value)
-        return f"a table of {len(value)} entries" + (f" nested {depth} levels deep" if depth > 1 else "")
-    return _absurd_scalar(value)
-
-
-_repr = reprlib.Repr()
-_repr.maxlevel, _repr.maxlist, _repr.maxtuple, _repr.maxdict, _repr.maxstring, _repr.maxother = 2, 8, 8, 8, 60, 60
-_repr.maxlong = 40
+_SHORT_REPR = _ShortRepr()
 
 
 def shown(value: Any) -> Any:
-    """``value`` itself for an error message when it is short; a summary when it is absurd."""
-    why = _absurd(value)
-    if why is not None:
-        return _Shown(f"<{why}>")
-    if isinstance(value, (list, tuple, dict, str)):
-        text = _repr.repr(value)
-        return value if text == repr(value) else _Shown(text)
-    return value
+    """``value`` as an error message shows it: its repr cut short, since a file's value
+    may be a megabyte of text or lists nested thousands of levels deep."""
+    return _Shown(_SHORT_REPR.repr(value))
 
 
 def short_name(key: Any) -> str:
@@ -172,12 +107,24 @@ def allowed_for(name: str) -> str:
     return OPTION_ALLOWED.get(name, "a plain value")
 
 
+def _plain_scalar(value: Any) -> bool:
+    """Whether ``value`` is a scalar any validator can take: not a list or table, a text of
+    at most :data:`MAX_TEXT` characters, an integer of at most :data:`MAX_INT_DIGITS` digits."""
+    if isinstance(value, (list, tuple, dict)):
+        return False
+    if isinstance(value, str):
+        return len(value) <= MAX_TEXT
+    return not isinstance(value, int) or abs(value) < 10 ** MAX_INT_DIGITS
+
+
 def check_plain(name: str, value: Any) -> Any:
     """``value`` if it is a plain value an option may take (a short text, a number that is not
-    absurdly long, a short flat list); else :class:`ParameterError` naming ``name``."""
-    why = _absurd(value)
-    if why is not None:
-        raise ParameterError(short_name(name), _Shown(f"<{why}>"), allowed_for(name))
+    absurdly long, a flat list of at most :data:`MAX_ITEMS` of those); else
+    :class:`ParameterError` naming ``name``.  Checked before the option's own validator,
+    so that none has to cope with a megabyte of text, nested lists or a 400-digit integer."""
+    items = value if isinstance(value, (list, tuple)) else [value]
+    if len(items) > MAX_ITEMS or not all(map(_plain_scalar, items)):
+        raise ParameterError(short_name(name), shown(value), allowed_for(name))
     return value
 
 
@@ -429,55 +376,15 @@ def read_regular_file(path: str | os.PathLike, name: str, allowed: str, limit: i
     return data
 
 
-def _parse_int(text: str) -> Any:
-    return int(text) if len(text) <= 100 else _LongInteger(text)
-
-
-def _loads_json(text: str) -> Any:
-    decoder = json.JSONDecoder(parse_int=_parse_int)
-    decoder.scan_once = py_make_scanner(decoder)  # Python's recursion limit applies, not C's
-    return decoder.decode(text)
-
-
-def _deep(fn: Callable[[], Any]) -> Any:
-    """``fn()`` in a thread with a large stack and a high recursion limit, so that a
-    file whose values are nested thousands of levels deep can be read (and refused
-    value by value) rather than crash the reader."""
-    box: dict[str, Any] = {}
-
-    def target() -> None:
-        try:
-            box["value"] = fn()
-        except BaseException as e:  # handed to the caller
-            box["error"] = e
-
-    limit = sys.getrecursionlimit()
-    try:
-        previous = threading.stack_size(_PARSE_STACK)
-    except (ValueError, RuntimeError):
-        previous = None
-    try:
-        sys.setrecursionlimit(max(limit, _PARSE_RECURSION))
-        thread = threading.Thread(target=target, name="layered-brdf-read", daemon=True)
-        thread.start()
-        if previous is not None:
-            threading.stack_size(previous)
-            previous = None
-        thread.join()
-    finally:
-        if previous is not None:
-            threading.stack_size(previous)
-        sys.setrecursionlimit(limit)
-    if "error" in box:
-        raise box["error"]
-    return box.get("value")
-
-
 def read_table_file(path: str | os.PathLike, name: str, allowed: str) -> Any:
     """The contents of a ``.toml`` or ``.json`` file; :class:`ParameterError` naming ``name``
     (with ``allowed``) if it cannot be read or parsed, is not a regular file or is larger
-    than :data:`MAX_INPUT_BYTES`.  Integers too long to be a value are kept as a marker
-    that :func:`check_plain` refuses."""
+    than :data:`MAX_INPUT_BYTES`.
+
+    The standard parsers read it; the size cap bounds their work.  A file nested deeper
+    than they follow (their RecursionError: some hundreds of levels of TOML, about 1,000
+    of JSON on Python 3.11 and 10,000 on 3.13) is refused as a whole, and so is one with
+    an integer of more digits than Python converts (4300): no option takes either."""
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix not in (".toml", ".json"):
@@ -488,13 +395,14 @@ def read_table_file(path: str | os.PathLike, name: str, allowed: str) -> Any:
     except UnicodeDecodeError as e:
         raise ParameterError(name, str(p), f"{allowed} (UnicodeDecodeError: {e})") from None
     try:
-        return _deep(lambda: tomllib.loads(text) if suffix == ".toml" else _loads_json(text))
+        return tomllib.loads(text) if suffix == ".toml" else json.loads(text)
     except (tomllib.TOMLDecodeError, json.JSONDecodeError) as e:
         raise ParameterError(name, str(p), f"{allowed} ({str(e)[:200]})") from None
     except RecursionError:
         raise ParameterError(name, str(p), f"{allowed} (values nested deeper than can be read)") from None
-    except (ValueError, OverflowError, MemoryError) as e:  # e.g. an integer of more than 4300 digits
-        raise ParameterError(name, str(p), f"{allowed} ({str(e)[:200]})") from None
+    except ValueError:  # the parsers' only other error: int() refuses a literal of over 4300 digits
+        raise ParameterError(name, str(p), f"{allowed} (an integer too long to read; options take at most "
+                             f"{MAX_INT_DIGITS} digits)") from None
 
 
 def load_params_file(path: str | os.PathLike, label: str | None = None) -> dict[str, Any]:
