@@ -129,6 +129,7 @@ def test_settings_and_panel_come_from_param_specs():
         else:
             assert data == properties.settings(mat) and prop == spec.name
     assert "Thickness min (nm)" in drawn and "Tilt (\u00b0)" in drawn and "Base Color" in drawn
+
     infos = [e[3].param for e in log if e[0] == "operator" and e[1] == "layered_brdf.param_info"]
     assert sorted(infos) == sorted(s.name for s in PARAM_SPECS if s.component in (None, 0))
     tip = properties.param_tooltip("d_min")
@@ -492,3 +493,23 @@ def test_eevee_links_the_largest_accuracy_mode(tmp_path):
     print(f"EEVEE render, spectral 32: {seconds:.1f} s")
     assert not S.shader_failed(eevee).any()
     assert_highlights_meet(cycles, eevee)
+
+
+def test_a_redraw_of_the_material_panel_reads_the_animation_once(monkeypatch):
+    """The panel shows the material's problem and its effects from one look at its keyframes,
+    drivers and links (a walk over every animation curve of the material)."""
+    from types import SimpleNamespace
+
+    from blender_helpers import Layout
+    from layered_brdf_addon.blender import ui
+
+    obj = plain_object()
+    load_preset(obj, "beetle_shell")
+    walks = []
+    real = M.animated_parameters
+    monkeypatch.setattr(M, "animated_parameters", lambda mat: walks.append(mat) or real(mat))
+    log = []
+    ui.LAYERED_BRDF_PT_material.draw(SimpleNamespace(layout=Layout(log)), SimpleNamespace(object=obj,
+                                                                                          scene=bpy.context.scene))
+    assert len(walks) == 1
+    assert any(line.startswith("Effects (") for line in labels(log))

@@ -210,13 +210,18 @@ def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
     return params, backend, plan_effects(params, M.animated_parameters(mat))
 
 
+def desired_or_problem(mat) -> tuple[tuple[LayeredParams, str, EffectPlan] | None, str | None]:
+    """``(desired(mat), None)``, or ``(None, why the material cannot be edited or rebuilt now)``:
+    one walk over the material's animation for a panel that shows both."""
+    try:
+        return desired(mat), None
+    except ParameterError as e:
+        return None, str(e)
+
+
 def material_problem(mat) -> str | None:
     """Why the material cannot be edited or rebuilt now, or None."""
-    try:
-        desired(mat)
-    except ParameterError as e:
-        return str(e)
-    return None
+    return desired_or_problem(mat)[1]
 
 
 def _signature(mat, params: LayeredParams, backend: str, plan: EffectPlan) -> str:

@@ -82,7 +82,7 @@ def draw_material(layout, context) -> None:
         if not ok:
             col = _alert(layout, f"OSL will not run: {reason}")
             col.operator("layered_brdf.enable_osl", icon="SETTINGS")
-    problem = properties.material_problem(mat)
+    wanted, problem = properties.desired_or_problem(mat)
     if problem:
         _alert(layout, problem)
     row = layout.row(align=True)
@@ -95,8 +95,8 @@ def draw_material(layout, context) -> None:
         layout.label(text=f"Remove puts '{displaced.name}' back in the slot", icon="INFO")
     if M.shader_node(mat) is None:
         layout.label(text="The material has no Layered BRDF node: Rebuild restores it", icon="INFO")
-    elif problem is None:
-        _, _, plan = properties.desired(mat)
+    elif wanted is not None:
+        _, _, plan = wanted
         col = layout.column(align=True)
         col.label(text=f"Effects ({plan.key}):")
         for line in plan.describe():
