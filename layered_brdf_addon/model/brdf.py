@@ -1,7 +1,9 @@
 """The layered RGB BRDF of Granier & Heidrich (2003), exact and vectorised.
 
 Conventions (SPEC): ``i`` points towards the surface, ``o`` away from it; channel
-axis last.  Equation numbers are the journal paper's.
+axis last.  Equation numbers are the journal paper's.  :func:`layered_brdf` evaluates it
+in a material's accuracy mode (the paper's RGB, the analytic band integral, or N
+wavelengths), the colour model its shader approximates.
 """
 from __future__ import annotations
 
@@ -10,10 +12,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .geometry import Z_AXIS
-from .params import WAVELENGTHS_NM
+from .params import WAVELENGTHS_NM, LayeredParams
 from . import ops_numpy
-from .program import film_beams, fresnel_reflectance, harmonics, interference_path
+from .policy import spectral_count
+from .program import film_beams, film_diffuse_rho, fresnel_reflectance, harmonics, interference_path
 from .spectral_band import channel_cosine
+from .spectral_tables import tables
 
 TWO_PI = 2.0 * np.pi
 EXACT_HARMONICS = 4  # the exact model's thin-film optics: harmonics of the beams bouncing in the layer
@@ -173,12 +177,21 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
     return SpecularTerms(R, T, phase, rho)
 
 
+def _channel_values(x, shape):
+    """``x`` broadcast to ``shape`` (..., C) as the shading program's channel value: a triple
+    where C = 3 (the RGB channels, which its ops treat channel by channel), else a plain
+    array that they evaluate elementwise (wavelengths of a spectral mode, each like the
+    scalar channel value of a shader's spectral step)."""
+    a = np.broadcast_to(np.asarray(x, dtype=float), shape)
+    return ops_numpy.vec(a) if shape[-1] == 3 else a
+
+
 def _film_terms(cos_l, cos_v, c_r, c_t, s_i, s_o, r1, d, e0, e1, r0, lam, band, n2, k2, orders):
     """The physical mode's terms of :func:`specular_terms` (see there), per channel."""
-    shape = np.broadcast_shapes(np.shape(cos_l), np.shape(r1), np.shape(s_i))
+    shape = np.broadcast_shapes(np.shape(cos_l), np.shape(r1), np.shape(s_i), np.shape(d))
 
     def v(x):
-        return ops_numpy.vec(np.broadcast_to(np.asarray(x, dtype=float), shape))
+        return _channel_values(x, shape)
 
     r1v, n2v, k2v = v(r1), v(n2), v(k2)
     f = film_beams(ops_numpy, v(cos_l), v(s_i), r1v, r0, n2v, k2v, orders=orders)
@@ -248,30 +261,82 @@ def average_refracted_cosine(r1, r0=1.0):
 
 
 def layered_brdf(i, o, n0, n1, d, params, ng=Z_AXIS, wavelengths=WAVELENGTHS_NM):
-    """Full BRDF ``ks rho + kd base rho_d / pi`` (SPEC), shape (..., 3); the analytic
-    accuracy mode integrates the interference over each channel's band."""
+    """Full BRDF ``ks rho + kd base rho_d / pi`` (SPEC), shape (..., 3), in the colour model of
+    ``params.accuracy``, the one its shader approximates (docs/spectral.md):
+
+    * ``"rgb"``: eqs. 5 and 18 at the paper's three ``wavelengths``, taken as R, G and B;
+    * ``"analytic"``: the same three channels, the interference cosines integrated over
+      each channel's band (:func:`.spectral_band.channel_cosine`);
+    * ``"spectralN"``: N wavelengths summed into linear Rec.709 (:func:`spectral_parts`;
+      ``wavelengths`` is not used).
+
+    The base colour multiplies the diffuse factor once its colour is formed, as the
+    diffuse closure's weight does.
+    """
     p = params
-    band = p.accuracy == "analytic"
+    n = spectral_count(p.accuracy)
+    if n:
+        fs, rho_d = spectral_parts(i, o, n0, n1, d, p, n, ng)
+    else:
+        fs, rho_d = channel_parts(i, o, n0, n1, d, p, p.r1, p.r2, p.k2, wavelengths, ng, p.accuracy == "analytic")
+    return p.ks * fs + p.kd * (rho_d * np.asarray(p.base_color) / np.pi)
+
+
+def channel_parts(i, o, n0, n1, d, p, r1, r2, k2, wavelengths, ng=Z_AXIS, band=False):
+    """The specular ``rho`` (eq. 5) and the diffuse factor ``rho_d`` (eq. 18) of ``p`` at the
+    channels' ``wavelengths``, shape (..., C) each; ``r1``, ``r2``, ``k2``: the layer's and the
+    lower medium's indices there, (C,).  With ``p.optics == "physical"``, thin-film optics
+    (:func:`specular_terms`, :func:`film_diffuse`); ``band``: see :func:`specular_terms`."""
     if p.optics == "physical":
         orders = EXACT_HARMONICS  # wherever the closures sum fewer
-        fs = specular_brdf(i, o, n0, n1, p.r1, d, p.e0, p.e1, p.r0, wavelengths, ng, band, optics="physical",
-                           n2=p.r2, k2=p.k2, orders=orders)
-        fd = film_diffuse(p, d, wavelengths, band, orders) * np.asarray(p.base_color) / np.pi
-        return p.ks * fs + p.kd * fd
-    fs = specular_brdf(i, o, n0, n1, p.r1, d, p.e0, p.e1, p.r0, wavelengths, ng, band)
-    fd = diffuse_rho(p.r1, d, p.r0, wavelengths, band) * np.asarray(p.base_color) / np.pi
-    return p.ks * fs + p.kd * fd
+        fs = specular_brdf(i, o, n0, n1, r1, d, p.e0, p.e1, p.r0, wavelengths, ng, band, optics="physical",
+                           n2=r2, k2=k2, orders=orders)
+        return fs, film_diffuse(r1, r2, k2, p.r0, d, wavelengths, band, orders)
+    fs = specular_brdf(i, o, n0, n1, r1, d, p.e0, p.e1, p.r0, wavelengths, ng, band)
+    return fs, diffuse_rho(r1, d, p.r0, wavelengths, band)
 
 
-def film_diffuse(p, d, wavelengths=WAVELENGTHS_NM, band=False, orders=1):
-    """The physical mode's diffuse factor (:func:`.program.film_diffuse_rho`), shape (..., 3)."""
-    from .program import film_diffuse_rho
+def spectral_parts(i, o, n0, n1, d, p, n, ng=Z_AXIS):
+    """:func:`channel_parts` of the spectral mode of ``n`` wavelengths, in linear Rec.709,
+    shape (..., 3) each: the model at each wavelength of the mode's sampling (the centres of
+    ``n`` equal bins over 380-780 nm), its indices from the Cauchy fit through the three
+    channels' values, summed with the bins' CIE 1931 / D65 weights: the baked tables of the
+    shader's spectral steps (:mod:`.spectral_tables`, :func:`.program.shade_spectral`).
 
+    One wavelength at a time, so that only the running sums are (..., 3) arrays, whatever
+    ``n``.  What the closures approximate, not what they compute: every wavelength refracts
+    on its own (no lobe groups), the interference stays whatever the thickness (the planner
+    drops it past the cut-off), and a sum outside the Rec.709 gamut keeps its negative
+    channel.  Sampled like this the colour converges to the 1 nm ground truth
+    (:mod:`.spectral`) as ``n`` grows, and aliases where the optical path is too long for
+    the bins (docs/spectral.md)."""
+    t = tables(n)
+    fs = rho_d = 0.0
+    for lam, row, m in zip(t["wavelengths"], t["cauchy"], t["rgb"]):
+        r1, r2, k2 = (_at_wavelength(row, values, name) for values, name in ((p.r1, "r1_r"), (p.r2, "r2_r"),
+                                                                               (p.k2, "k2_r")))
+        s, sd = channel_parts(i, o, n0, n1, d, p, r1, r2, k2, (lam,), ng)
+        fs = fs + s * np.asarray(m)
+        rho_d = rho_d + sd * np.asarray(m)
+    return fs, rho_d
+
+
+def _at_wavelength(row, values, name):
+    """A channel triple's value at one wavelength of a spectral mode, shape (1,): ``row .
+    values`` (the Cauchy fit through the three values, a baked row), kept inside the range of
+    the parameter ``name``, as the shader keeps it."""
+    spec = LayeredParams.spec(name)
+    return np.clip([float(np.dot(row, values))], spec.min, spec.max)
+
+
+def film_diffuse(r1, r2, k2, r0, d, wavelengths=WAVELENGTHS_NM, band=False, orders=1):
+    """The physical mode's diffuse factor (:func:`.program.film_diffuse_rho`) of the channels'
+    indices ``r1``, ``r2`` and ``k2`` at ``wavelengths``, (C,) each; shape (..., C)."""
     d = np.asarray(d, dtype=float)
-    shape = d.shape + (3,)
+    shape = d.shape + np.shape(wavelengths)
 
     def v(x):
-        return ops_numpy.vec(np.broadcast_to(np.asarray(x, dtype=float), shape))
+        return _channel_values(x, shape)
 
-    return np.asarray(film_diffuse_rho(ops_numpy, v(p.r1), p.r0, v(p.r2), v(p.k2), v(wavelengths),
-                                       d, band=band, orders=orders))
+    return np.asarray(film_diffuse_rho(ops_numpy, v(r1), r0, v(r2), v(k2), v(wavelengths), v(d[..., None]),
+                                       band=band, orders=orders))
