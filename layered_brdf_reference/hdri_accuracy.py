@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from layered_brdf_addon.model.geometry import dot
-from layered_brdf_addon.model.looks import equirect_lookup
+from .look_bounds import equirect_lookup
 from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.sphere import OrthoCamera, lower_normal, sphere_geometry, thickness_field
 

@@ -1,6 +1,6 @@
 """The artist presets look like their names: dominant hues, saturation, brightness and a
 mirror-like reflection where claimed, on spheres rendered under one of Blender's bundled
-HDRIs (model/looks.py holds the bounds); the looks they replaced fail the same checks."""
+HDRIs (layered_brdf_reference/look_bounds.py holds the bounds); the looks they replaced fail the same checks."""
 from __future__ import annotations
 
 import bpy
@@ -10,7 +10,7 @@ import pytest
 from layered_brdf_addon.blender import scene as S
 from layered_brdf_addon.blender.lookdev import hdri_path
 from layered_brdf_addon.blender.material import apply_layered_material, shader_node
-from layered_brdf_addon.model import looks as L
+from layered_brdf_reference import look_bounds as L
 from layered_brdf_addon.model.base_layers import base_node, phong_to_roughness
 from layered_brdf_addon.model.presets import ARTIST_PRESETS, preset
 from layered_brdf_addon.model.sphere import Sun, sphere_geometry

@@ -1,4 +1,6 @@
-"""What each artist preset should look like, as numbers a render can be checked against.
+"""What each artist preset should look like, as numbers a render can be checked against (the
+bounds of tests/test_looks.py; a "look" of the Asset Browser is something else: a material
+marked as an asset, blender/assets.py).
 
 A look is judged on the object's pixels of a render under an HDRI (linear Rec.709): which
 hues its colourful pixels take (HSV hue in degrees: red 0, yellow 60, green 120, cyan 180,
@@ -12,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from layered_brdf_addon.fit.environment import direction_to_uv
 
 COLOURFUL = 0.15  # HSV saturation above which a pixel counts as coloured
 HUE_SECTORS = 6  # red, yellow, green, cyan, blue, magenta: 60 degrees each, centred on the primaries
@@ -157,10 +161,9 @@ def mirror_directions(normals: np.ndarray, view: np.ndarray) -> np.ndarray:
 
 def equirect_lookup(image: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """Radiance of an equirectangular environment ``image`` (H, W, C, bottom row first as Blender
-    stores it) in world ``directions`` (..., 3), as Blender's Environment Texture maps it."""
-    d = np.asarray(directions, dtype=float)
-    u = -np.arctan2(d[..., 1], d[..., 0]) / (2.0 * np.pi) + 0.5
-    v = np.arctan2(d[..., 2], np.hypot(d[..., 0], d[..., 1])) / np.pi + 0.5
+    stores it) in world ``directions`` (..., 3), as Blender's Environment Texture maps it
+    (nearest texel)."""
+    u, v = direction_to_uv(np.asarray(directions, dtype=float))
     h, w = image.shape[:2]
     x = np.clip((u * w).astype(int), 0, w - 1)
     y = np.clip((v * h).astype(int), 0, h - 1)
