@@ -17,90 +17,20 @@ written (a full disk: one line with the OS's reason, nothing written); 2 invalid
 from __future__ import annotations
 
 import argparse
-import contextlib
-import re
 import sys
 from pathlib import Path
-from typing import Any, Collection, Iterable, Iterator, Sequence
+from typing import Any, Collection, Iterable, Sequence
 
 from .. import __version__
 from ..model import policy
-from ..model.params import PARAM_SPECS, ParameterError, ParamSpec
+from ..model.params import PARAM_SPECS, ParameterError
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
+from .options import (EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK, ArgumentParser, add_param_options,
+                      blender_output)
 from .staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 
 PROG = "layered-brdf"
 COMMANDS = ("lookdev", "gallery", "render", "batch", "fit")
-EXIT_OK, EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
-
-
-# A token that starts like a number ("-1e2", "-.5", "-3x2", "-inf") is a value, not an option:
-# argparse's own rule misses scientific notation ("-1e2": "expected one argument").
-NEGATIVE_NUMBER = re.compile(r"^-(\.?\d|inf(inity)?$|nan$)", re.IGNORECASE)
-
-
-class ArgumentParser(argparse.ArgumentParser):
-    """argparse's parser, reading every negative number (scientific notation too) as a value."""
-
-    def __init__(self, *args: Any, **kwargs: Any):
-        super().__init__(*args, **kwargs)
-        self._negative_number_matcher = NEGATIVE_NUMBER
-
-
-# ---------------------------------------------------------------------------
-# options derived from the parameter specs
-def _number(text: str) -> Any:
-    """A float where the text is a number; the text itself otherwise (validation names it)."""
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
-def _range_text(spec: ParamSpec) -> str:
-    parts = [f"allowed {spec.allowed}"]
-    if spec.soft_min is not None and spec.soft_max is not None:
-        parts.append(f"typical {spec.soft_min:g}-{spec.soft_max:g}")
-    return "; ".join(parts)
-
-
-def param_help(spec: ParamSpec) -> str:
-    """Help text of a parameter's option: description, unit, range, default."""
-    default = f"{spec.default:g}" if spec.kind == "float" else str(spec.default)
-    unit = f" {spec.unit}" if spec.unit and spec.kind == "float" else ""
-    text = f"{spec.description} ({_range_text(spec)}; default {default}{unit})"
-    return text.replace("%", "%%")
-
-
-def param_metavar(spec: ParamSpec) -> str | None:
-    if spec.kind == "enum":
-        return "{" + ",".join(spec.options) + "}"
-    if spec.unit and spec.unit.replace("/", "").isalpha():
-        return spec.unit.upper().replace("/", "_PER_") if "/" in spec.unit else spec.unit.upper()
-    return "X"
-
-
-def add_param_options(parser: argparse.ArgumentParser) -> None:
-    """One option per parameter of PARAM_SPECS (``d_min`` -> ``--d-min NM``), grouped like the specs."""
-    groups: dict[str, argparse._ArgumentGroup] = {}
-    for spec in PARAM_SPECS:
-        group = groups.get(spec.group)
-        if group is None:
-            group = groups[spec.group] = parser.add_argument_group(
-                f"material parameters: {spec.group.lower()}",
-                "override the preset / params file; unset ones keep their value")
-        flag = "--" + spec.name.replace("_", "-")
-        if spec.kind == "bool":
-            group.add_argument(flag, dest=spec.name, action=argparse.BooleanOptionalAction, default=None,
-                               help=param_help(spec))
-        elif spec.kind == "enum":
-            group.add_argument(flag, dest=spec.name, choices=spec.options, default=None,
-                               metavar=param_metavar(spec), help=param_help(spec))
-        else:
-            group.add_argument(flag, dest=spec.name, type=_number, default=None, metavar=param_metavar(spec),
-                               help=param_help(spec))
-
-
 def _add_scene_options(p: argparse.ArgumentParser, samples_help: str) -> None:
     p.add_argument("--backend", choices=policy.BACKENDS, default=None,
                    help="shader backend: the generated node group (default) or the OSL script")
@@ -234,29 +164,6 @@ def _numeric(s: str) -> bool:
 
 
 # ---------------------------------------------------------------------------
-@contextlib.contextmanager
-def blender_output(verbose: bool) -> Iterator[None]:
-    """Send what Blender prints on stdout (render progress) to /dev/null unless ``verbose``."""
-    if verbose:
-        yield
-        return
-    import ctypes
-    import os
-
-    sys.stdout.flush()
-    saved = os.dup(1)
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    libc = ctypes.CDLL(None)
-    try:
-        os.dup2(devnull, 1)
-        yield
-    finally:
-        libc.fflush(None)
-        os.dup2(saved, 1)
-        os.close(saved)
-        os.close(devnull)
-
-
 def _options(ns: argparse.Namespace, names: Sequence[str]) -> dict[str, Any]:
     return {n: getattr(ns, n) for n in names if getattr(ns, n, None) is not None}
 

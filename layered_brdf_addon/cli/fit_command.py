@@ -42,6 +42,7 @@ from .. import __version__
 from ..fit.environment import DEFAULT_HDRIS
 from ..model.params import PARAM_SPECS, LayeredParams, ParameterError
 from ..model.presets import PRESETS, preset
+from .options import EXIT_OK, blender_output, param_metavar
 from .requests import (MAX_INPUT_BYTES, MAX_STEM_BYTES, MAX_TEXT, file_label, from_file, int_option,
                        load_params_file, merged_values, option_flag, read_regular_file, read_table_file,
                        same_file, shown)
@@ -78,7 +79,6 @@ OUTPUT_ALLOWED = "a file path stem in a writable folder (STEM.json and STEM.png 
 # the sub-command's options
 def add_parser(sub) -> argparse.ArgumentParser:
     """The ``fit`` sub-command of ``sub`` (the parser's sub-parsers)."""
-    from .commands import param_metavar
 
     f = sub.add_parser(
         "fit", help="fit a layered material to a render, a reflectance table or a Principled BSDF material",
@@ -381,7 +381,6 @@ def load_principled_target(source: Source, ns: argparse.Namespace, guard) -> Loa
     """The Principled BSDF material ``--material`` of the .blend, rendered by Cycles on the
     reference sphere (:func:`layered_brdf_addon.blender.principled_target.principled_views`)."""
     from ..fit.targets import SphereTarget, TargetError as FitTargetError
-    from .commands import blender_output
     from .requests import check_blend_file
 
     size = int_option("size", ns.size, 8, 4096) if ns.size is not None else PRINCIPLED_SIZE
@@ -623,7 +622,6 @@ def cmd_fit(ns: argparse.Namespace, argv: Sequence[str] | None = None) -> int:
     """``fit``: validate everything, read (or render) the target, fit, write OUT.json and OUT.png."""
     from ..fit.free import check_vary
     from ..fit.solve import FitCancelled
-    from .commands import EXIT_OK
     from .staging import InterruptGuard
 
     source = source_of(ns)

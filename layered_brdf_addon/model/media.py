@@ -13,6 +13,8 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import ParameterError
+
 PATH = Path(__file__).with_name("data") / "media.json"
 
 
@@ -71,14 +73,12 @@ def media_names() -> tuple[str, ...]:
 
 def _pick(name: str, allowed: tuple[str, ...], what: str = "") -> Medium:
     if not isinstance(name, str) or name not in allowed:
-        # params imports this module for the media names, so its error class is imported late.
-        from .params import ParameterError
         raise ParameterError("medium", name, what + "one of " + ", ".join(allowed))
     return MEDIA[name]
 
 
 def medium(name: str) -> Medium:
-    """The medium called ``name``; :class:`~.params.ParameterError` ("medium") for an unknown name."""
+    """The medium called ``name``; :class:`~.errors.ParameterError` ("medium") for an unknown name."""
     return _pick(name, media_names())
 
 

@@ -17,20 +17,11 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Iterator, Mapping
 
+from .errors import ParameterError
 from .media import MEDIA, media_names
 
 # Representative wavelengths of the R, G and B channels, in nanometres (SPEC).
 WAVELENGTHS_NM = (645.0, 525.0, 445.0)
-
-
-class ParameterError(ValueError):
-    """A parameter is outside its allowed range or of the wrong kind."""
-
-    def __init__(self, name: str, value: Any, allowed: str):
-        self.name = name
-        self.value = value
-        self.allowed = allowed
-        super().__init__(f"parameter '{name}' = {value!r} is invalid: allowed {allowed}")
 
 
 @dataclass(frozen=True)
