@@ -59,7 +59,7 @@ generated: $(STAMP)
 
 # Refit the analytic mode's closed form (model/data/band_fit.json) from the CIE tables, a few minutes.
 band-fit: $(STAMP)
-	$(PY) -c "from layered_brdf_addon.model.spectral_band import main; main()"
+	$(PY) -m layered_brdf_reference.band_fitting
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reference.py

@@ -15,12 +15,26 @@ from .geometry import Z_AXIS
 from .params import WAVELENGTHS_NM, LayeredParams
 from . import ops_numpy
 from .policy import spectral_count
-from .program import film_beams, film_diffuse_rho, fresnel_reflectance, harmonics, interference_path
-from .spectral_band import channel_cosine
+from .program import band_cosine, film_beams, film_diffuse_rho, fresnel_reflectance, harmonics, interference_path
+from .spectral_band import per_channel
 from .spectral_tables import tables
 
 TWO_PI = 2.0 * np.pi
 EXACT_HARMONICS = 4  # the exact model's thin-film optics: harmonics of the beams bouncing in the layer
+
+
+def channel_cosine(opd_nm, r1_rgb=None, slope_nm=None) -> np.ndarray:
+    """``C_c`` from the baked fit (numpy), the formula the shaders evaluate
+    (:func:`~.program.band_cosine`).  ``opd_nm``: the path difference ``D`` (...), or (..., 3)
+    per channel; with ``r1_rgb`` (the three indices) and ``slope_nm`` (``dD/dr1``) the path
+    follows the dispersed index.  What it approximates, the 1 nm integral, is
+    ``layered_brdf_reference.band_fitting.channel_cosine_numeric``."""
+    D = per_channel(opd_nm)
+    if r1_rgb is None:
+        return np.asarray(band_cosine(ops_numpy, ops_numpy.vec(D), 0.0, 0.0, dispersion=False))
+    S = per_channel(slope_nm, D.shape)
+    r1 = ops_numpy.vec(np.broadcast_to(np.asarray(r1_rgb, dtype=float), D.shape))
+    return np.asarray(band_cosine(ops_numpy, ops_numpy.vec(D), ops_numpy.vec(S), r1, dispersion=True))
 
 
 def fresnel_f0(r1, r0=1.0):
@@ -104,7 +118,7 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
     their reflection phases, each direction pair on its own.
 
     ``band``: the analytic mode, ``r1`` the three RGB indices and the interference cosine
-    of eq. 5 integrated over each channel's band (:func:`.spectral_band.channel_cosine`)
+    of eq. 5 integrated over each channel's band (:func:`channel_cosine`)
     instead of taken at ``wavelengths``.
 
     ``i``, ``o``, ``n0``, ``n1``: (..., 3).  ``r1`` and ``wavelengths``: (C,) or (..., C).
@@ -266,7 +280,7 @@ def layered_brdf(i, o, n0, n1, d, params, ng=Z_AXIS, wavelengths=WAVELENGTHS_NM)
 
     * ``"rgb"``: eqs. 5 and 18 at the paper's three ``wavelengths``, taken as R, G and B;
     * ``"analytic"``: the same three channels, the interference cosines integrated over
-      each channel's band (:func:`.spectral_band.channel_cosine`);
+      each channel's band (:func:`channel_cosine`);
     * ``"spectralN"``: N wavelengths summed into linear Rec.709 (:func:`spectral_parts`;
       ``wavelengths`` is not used).
 
