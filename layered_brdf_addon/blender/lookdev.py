@@ -22,7 +22,7 @@ import numpy as np
 from mathutils import Euler, Vector
 
 from ..model.params import LayeredParams, ParameterError
-from .scene import deterministic_cycles, ensure_passes, mesh_from_arrays
+from .scene import deterministic_cycles, ensure_passes, hdri_world, mesh_from_arrays
 
 HDRI_PREFERENCE = ("forest.exr", "courtyard.exr", "studio.exr")
 HDRI_STRENGTH = 1.0
@@ -235,18 +235,9 @@ def _populate(scene, size: int, samples: int, engine: str, env_path: Path):
     sun.rotation_euler = Euler(tuple(math.radians(a) for a in SUN_ROTATION_DEG))
     scene.collection.objects.link(sun)
 
-    world = _track(scene, "worlds", bpy.data.worlds.new("LookDevWorld"))
-    image = _track(scene, "images", bpy.data.images.load(str(env_path), check_existing=False))
-    nt = world.node_tree
-    env = nt.nodes.new("ShaderNodeTexEnvironment")
-    env.image = image
-    bg = nt.nodes.get("Background") or nt.nodes.new("ShaderNodeBackground")
-    bg.inputs["Strength"].default_value = HDRI_STRENGTH
-    nt.links.new(env.outputs["Color"], bg.inputs["Color"])
-    out = next((n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld"), None) \
-        or nt.nodes.new("ShaderNodeOutputWorld")
-    if not bg.outputs[0].links:
-        nt.links.new(bg.outputs[0], out.inputs["Surface"])
+    world, image = hdri_world("LookDevWorld", env_path, HDRI_STRENGTH)
+    _track(scene, "worlds", world)
+    _track(scene, "images", image)
     scene.world = world
 
     scene.render.engine = engine

@@ -431,18 +431,15 @@ def set_uniform_environment(radiance: float = 1.0, scene=None) -> None:
     bg.inputs["Strength"].default_value = radiance
 
 
-def set_hdri_environment(image_path, strength: float = 1.0, scene=None):
-    """Replace the lights by an equirectangular HDRI on a world of its own (Environment
-    Texture, default mapping, ``strength``); returns the world.  The world and the image are
-    new datablocks: whoever builds a scene with them removes them with it."""
-    scene = scene or bpy.context.scene
-    for obj in list(scene.objects):
-        if obj.type == "LIGHT":
-            bpy.data.objects.remove(obj)
-    world = bpy.data.worlds.new("Layered BRDF environment")
+def hdri_world(name: str, image_path, strength: float = 1.0):
+    """A new world lit by the equirectangular HDRI at ``image_path`` (Environment Texture,
+    default mapping, ``strength``); returns the world and the image, new datablocks that whoever
+    builds a scene with them removes with it."""
+    world = bpy.data.worlds.new(name)
+    image = bpy.data.images.load(str(image_path), check_existing=False)
     nt = world.node_tree
     env = nt.nodes.new("ShaderNodeTexEnvironment")
-    env.image = bpy.data.images.load(str(image_path), check_existing=False)
+    env.image = image
     bg = nt.nodes.get("Background") or nt.nodes.new("ShaderNodeBackground")
     bg.inputs["Strength"].default_value = strength
     nt.links.new(env.outputs["Color"], bg.inputs["Color"])
@@ -450,6 +447,17 @@ def set_hdri_environment(image_path, strength: float = 1.0, scene=None):
         or nt.nodes.new("ShaderNodeOutputWorld")
     if not bg.outputs[0].links:
         nt.links.new(bg.outputs[0], out.inputs["Surface"])
+    return world, image
+
+
+def set_hdri_environment(image_path, strength: float = 1.0, scene=None):
+    """Replace the lights by an equirectangular HDRI on a world of its own (:func:`hdri_world`);
+    returns the world."""
+    scene = scene or bpy.context.scene
+    for obj in list(scene.objects):
+        if obj.type == "LIGHT":
+            bpy.data.objects.remove(obj)
+    world, _ = hdri_world("Layered BRDF environment", image_path, strength)
     scene.world = world
     return world
 
