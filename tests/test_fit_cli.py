@@ -15,7 +15,9 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.cli import commands as cli
-from layered_brdf_addon.cli.fit_command import DEFAULT_STARTS, PRESET_FORMAT, column_role, reflectance_rows
+from layered_brdf_addon.cli.fit_options import DEFAULT_STARTS, start_of
+from layered_brdf_addon.cli.fit_outputs import PRESET_FORMAT
+from layered_brdf_addon.cli.fit_targets import column_role, reflectance_rows
 from layered_brdf_addon.cli.requests import request_from_options
 from layered_brdf_addon.cli.sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dict, write_json
 from layered_brdf_addon.fit import colour_space
@@ -335,8 +337,6 @@ def test_an_output_over_an_input_is_refused(tmp_path, capsys):
 
 
 def test_the_start_takes_a_params_file_and_mode_options(tmp_path):
-    from layered_brdf_addon.cli.fit_command import start_of
-
     parser = cli.build_parser()
     ns = parser.parse_args(["fit", "t.json"])
     for kind, (name, modes) in DEFAULT_STARTS.items():

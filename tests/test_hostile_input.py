@@ -18,7 +18,7 @@ import pytest
 
 from layered_brdf_addon.cli import commands as cli
 from layered_brdf_addon.cli.gallery import settings_from_options
-from layered_brdf_addon.cli import job_files, requests
+from layered_brdf_addon.cli import input_files, job_files
 from layered_brdf_addon.cli.job_files import load_job_file
 from layered_brdf_addon.cli.requests import load_params_file, parse_sun, request_from_options
 from layered_brdf_addon.cli.staging import OutputPaths, StagedOutputs, temp_path
@@ -204,7 +204,7 @@ def test_a_fifo_is_refused_not_waited_on(tmp_path, which):
 
 
 def test_params_and_job_files_are_capped_at_1_mib(tmp_path):
-    MAX_INPUT_BYTES = requests.MAX_INPUT_BYTES
+    MAX_INPUT_BYTES = input_files.MAX_INPUT_BYTES
     assert MAX_INPUT_BYTES == 1 << 20
     ok = tmp_path / "ok.json"
     ok.write_text('{"ks": 0.5}' + " " * (MAX_INPUT_BYTES - 11))

@@ -128,7 +128,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--report", default=None, metavar="FILE.json", help="also write the results as JSON")
     b.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
 
-    from .fit_command import add_parser as add_fit_parser
+    from .fit_options import add_parser as add_fit_parser
 
     add_fit_parser(sub)
     return parser

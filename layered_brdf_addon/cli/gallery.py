@@ -19,7 +19,8 @@ from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects
 from ..model.presets import PAPER_PRESETS, preset
 from .codecs import to_srgb8
-from .requests import check_output, check_preset_names, float_option, int_option, parse_sun
+from .option_values import check_preset_names, float_option, int_option, parse_sun
+from .requests import check_output
 from .sidecar import camera_to_dict, sun_to_dict
 from .staging import OutputPaths, output_stem
 

@@ -7,8 +7,9 @@ from pathlib import Path
 from typing import Any
 
 from ..model.params import ParameterError
-from .requests import (REFERENCE_ONLY, RenderRequest, check_name, read_table_file, request_from_options,
-                       same_file, short_name, shown)
+from .input_files import read_table_file, same_file
+from .option_values import check_name, short_name, shown
+from .requests import REFERENCE_ONLY, RenderRequest, request_from_options
 from .staging import TargetError, check_targets
 
 

@@ -26,8 +26,8 @@ from ..model.policy import plan_effects
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
 from .codecs import muted_stderr, save_png
 from .gallery import GalleryLayout, compose_sheet, layout_for
+from .option_values import check_preset_names, int_option
 from .render_job import view_png_encoding
-from .requests import check_preset_names, int_option
 from .staging import StagedOutputs, TargetError, check_targets, output_stem, reading_back, writing
 
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"

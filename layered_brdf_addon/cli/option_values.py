@@ -1,0 +1,221 @@
+"""The values an option may take, checked without Blender.
+
+An option's value comes from the command line or from a file (a params file, a job's
+entry); every one is first checked to be a plain value (:func:`check_plain`: a short text,
+a number of few digits, a short flat list), then by its own validator (:func:`int_option`,
+:func:`float_option`, :func:`parse_resolution`, :func:`parse_sun`, names and paths), which
+raises :class:`ParameterError` naming the option.  :func:`shown` cuts a value short for a
+message.  Nothing here imports bpy.
+"""
+from __future__ import annotations
+
+import math
+import os
+import reprlib
+from pathlib import Path
+from typing import Any, Sequence
+
+from ..model import policy
+from ..model.params import PARAM_SPECS, ParameterError
+from ..model.presets import PRESETS
+
+PARAM_NAMES = tuple(s.name for s in PARAM_SPECS)
+MAX_RESOLUTION = 16384
+
+# Limits on what each value, typed or read from a file, may be.
+MAX_TEXT = 4096  # characters of a string value (a path, a name)
+MAX_ITEMS = 16  # items of a list value (sun: 3, resolution: 2)
+MAX_INT_DIGITS = 18  # digits of an integer value
+MAX_NAME = 200  # characters of a name
+MAX_STEM_BYTES = 200  # bytes (UTF-8) of an output stem's file name
+
+_SUN_ALLOWED = ("three finite numbers X Y Z, the direction towards the sun, with a length of at least 1e-9 "
+                "whose square is finite (|X|, |Y|, |Z| below about 1e154)")
+OPTION_ALLOWED = {
+    "name": f"a name of 1-{MAX_NAME} characters without '/', '\\' or NUL, not starting with '.'",
+    "preset": "one of " + ", ".join(sorted(PRESETS)),
+    "params": "the path of a .json or .toml file of parameter values",
+    "blend": "the path of a .blend file",
+    "object": "the name of the object in the .blend that gets the material",
+    "backend": "one of " + ", ".join(policy.BACKENDS),
+    "samples": "an integer in [1, 1000000]",
+    "resolution": f"N or WxH with integers in [1, {MAX_RESOLUTION}]",
+    "sun": _SUN_ALLOWED,
+    "sun_strength": "a number in [0, 1e+06]",
+    "seed": f"an integer in [0, {2**31 - 1}]",
+    "threads": "an integer in [1, 1024]",
+    "output": "a file path stem in a writable folder (STEM.png, STEM.exr and STEM.json are written)",
+}
+
+
+# ---------------------------------------------------------------------------
+# values in messages, and values too big for any option
+class _Shown:
+    """A value's short form for an error message: ``repr`` gives it as is (unquoted)."""
+
+    def __init__(self, text: str):
+        self.text = text
+
+    def __repr__(self) -> str:
+        return self.text
+
+
+class _ShortRepr(reprlib.Repr):
+    """``reprlib`` cut to a message line: 2 levels, 8 items, 60 characters.  An integer of
+    more digits than any option takes is named, not printed: a screen of digits says
+    less, and Python refuses to print one of over 4300."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.maxlevel, self.maxlist, self.maxtuple, self.maxdict, self.maxstring, self.maxother = 2, 8, 8, 8, 60, 60
+
+    def repr_int(self, x: int, level: int) -> str:
+        return repr(x) if abs(x) < 10 ** MAX_INT_DIGITS else f"<an integer of more than {MAX_INT_DIGITS} digits>"
+
+
+_SHORT_REPR = _ShortRepr()
+
+
+def shown(value: Any) -> Any:
+    """``value`` as an error message shows it: its repr cut short, since a file's value
+    may be a megabyte of text or lists nested thousands of levels deep."""
+    return _Shown(_SHORT_REPR.repr(value))
+
+
+def short_name(key: Any) -> str:
+    """A key of a file as a parameter name in a message (long or odd keys cut)."""
+    text = key if isinstance(key, str) else repr(shown(key))
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def allowed_for(name: str) -> str:
+    """What option or parameter ``name`` allows, for a message."""
+    for s in PARAM_SPECS:
+        if s.name == name:
+            return s.allowed
+    return OPTION_ALLOWED.get(name, "a plain value")
+
+
+def _plain_scalar(value: Any) -> bool:
+    """Whether ``value`` is a scalar any validator can take: not a list or table, a text of
+    at most :data:`MAX_TEXT` characters, an integer of at most :data:`MAX_INT_DIGITS` digits."""
+    if isinstance(value, (list, tuple, dict)):
+        return False
+    if isinstance(value, str):
+        return len(value) <= MAX_TEXT
+    return not isinstance(value, int) or abs(value) < 10 ** MAX_INT_DIGITS
+
+
+def check_plain(name: str, value: Any) -> Any:
+    """``value`` if it is a plain value an option may take (a short text, a number that is not
+    absurdly long, a flat list of at most :data:`MAX_ITEMS` of those); else
+    :class:`ParameterError` naming ``name``.  Checked before the option's own validator,
+    so that none has to cope with a megabyte of text, nested lists or a 400-digit integer."""
+    items = value if isinstance(value, (list, tuple)) else [value]
+    if len(items) > MAX_ITEMS or not all(map(_plain_scalar, items)):
+        raise ParameterError(short_name(name), shown(value), allowed_for(name))
+    return value
+
+
+PRESETS_ALLOWED = "preset names among " + ", ".join(PRESETS)
+
+
+def check_preset_names(names: Sequence[Any]) -> tuple[str, ...]:
+    """The presets of ``--presets`` (``gallery``, ``lookdev``): distinct known names; else
+    :class:`ParameterError` naming ``presets``, the option as typed."""
+    names = list(names)
+    if not names or not all(isinstance(n, str) for n in names):
+        raise ParameterError("presets", shown(names), PRESETS_ALLOWED)
+    if len(set(names)) != len(names):
+        raise ParameterError("presets", shown(names), "distinct preset names")
+    for name in names:
+        if name not in PRESETS:
+            raise ParameterError("presets", shown(name), PRESETS_ALLOWED)
+    return tuple(names)
+
+
+def check_name(value: Any, name: str = "name") -> str:
+    """A job or render name: used as a file name, so it is a name and not a path."""
+    allowed = OPTION_ALLOWED["name"]
+    if not isinstance(value, str) or not value.strip() or len(value) > MAX_NAME:
+        raise ParameterError(name, shown(value), allowed)
+    if any(c in value for c in "/\\\x00") or value.startswith(".") or os.path.isabs(value):
+        raise ParameterError(name, shown(value), allowed + " (a name, not a path)")
+    return value
+
+
+def option_flag(name: str) -> str:
+    """The command-line flag of an option or parameter: ``d_min`` -> ``--d-min``."""
+    return "--" + name.replace("_", "-")
+
+
+def int_option(name: str, value: Any, lo: int, hi: int) -> int:
+    allowed = f"an integer in [{lo}, {hi}]"
+    if isinstance(value, bool):
+        raise ParameterError(name, value, allowed)
+    try:
+        x = int(value) if not isinstance(value, float) else (int(value) if value.is_integer() else None)
+    except (TypeError, ValueError):
+        x = None
+    if x is None or not lo <= x <= hi:
+        raise ParameterError(name, value, allowed)
+    return x
+
+
+def float_option(name: str, value: Any, lo: float = -math.inf, hi: float = math.inf) -> float:
+    allowed = f"a number in [{lo:g}, {hi:g}]"
+    if isinstance(value, bool):
+        raise ParameterError(name, value, allowed)
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, allowed) from None
+    if not math.isfinite(x) or not lo <= x <= hi:
+        raise ParameterError(name, value, allowed)
+    return x
+
+
+def parse_resolution(value: Any) -> tuple[int, int]:
+    """``N`` (square), ``"WxH"`` or ``[W, H]`` as ``(width, height)``."""
+    allowed = f"N or WxH with integers in [1, {MAX_RESOLUTION}]"
+    if isinstance(value, (list, tuple)):
+        parts = list(value)
+    elif isinstance(value, str) and "x" in value.lower():
+        parts = value.lower().split("x")
+    else:
+        parts = [value, value]
+    if len(parts) != 2:
+        raise ParameterError("resolution", value, allowed)
+    try:
+        w, h = (int_option("resolution", p, 1, MAX_RESOLUTION) for p in parts)
+    except ParameterError:
+        raise ParameterError("resolution", value, allowed) from None
+    return w, h
+
+
+def parse_sun(value: Any) -> tuple[float, float, float]:
+    """Three finite numbers whose direction can be taken: the direction from the scene
+    towards the sun.  Refused: non-finite components, a length below 1e-9, and a squared
+    length that overflows (the renderer would fall back to straight up)."""
+    allowed = _SUN_ALLOWED
+    check_plain("sun", value)
+    if isinstance(value, str):
+        value = value.replace(",", " ").split()
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise ParameterError("sun", shown(value), allowed)
+    try:
+        xyz = tuple(float_option("sun", c) for c in value)
+    except ParameterError:
+        raise ParameterError("sun", shown(value), allowed) from None
+    n2 = math.fsum(c * c for c in xyz)
+    if not math.isfinite(n2) or n2 < 1e-18:
+        raise ParameterError("sun", shown(value), allowed)
+    return xyz  # type: ignore[return-value]
+
+
+def path_option(name: str, value: Any, allowed: str) -> Path:
+    """A path typed as option ``name``: a non-blank text of at most :data:`MAX_TEXT` characters
+    without NUL, ``~`` expanded; else :class:`ParameterError` naming ``name`` (with ``allowed``)."""
+    if not isinstance(value, str) or not value.strip() or "\x00" in value or len(value) > MAX_TEXT:
+        raise ParameterError(name, shown(value), allowed)
+    return Path(value).expanduser()
