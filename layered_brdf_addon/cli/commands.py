@@ -25,12 +25,26 @@ from .. import __version__
 from ..model import policy
 from ..model.params import PARAM_SPECS, ParameterError
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
+from .fit_command import cmd_fit
+from .fit_options import add_parser as add_fit_parser
+from .gallery import render_gallery, summary_rows
+from .gallery import settings_from_options as gallery_settings
+from .input_files import FileValueError
+from .job_files import load_job_file
+from .lookdev import DEFAULT_OUTPUT, DEFAULT_SAMPLES, DEFAULT_SIZE, SAMPLES_RANGE, SIZE_RANGE, render_lookdev
+from .lookdev import settings_from_options as lookdev_settings
+from .option_values import PARAM_NAMES, float_option, int_option
 from .options import (EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK, ArgumentParser, add_param_options,
                       blender_output)
+from .render_job import execute_render
+from .requests import RUN_OPTIONS, request_from_options
+from .runner import check_report_target, exit_code, follow_parent, run_batch, write_report
 from .staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 
 PROG = "layered-brdf"
 COMMANDS = ("lookdev", "gallery", "render", "batch", "fit")
+
+
 def _add_scene_options(p: argparse.ArgumentParser, samples_help: str) -> None:
     p.add_argument("--backend", choices=policy.BACKENDS, default=None,
                    help="shader backend: the generated node group (default) or the OSL script")
@@ -52,8 +66,6 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="exit codes: 0 ok, 1 a render or job failed, 2 invalid input (nothing written), 130 interrupted")
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="{" + ",".join(COMMANDS) + "}")
-
-    from .lookdev import DEFAULT_OUTPUT, DEFAULT_SAMPLES, DEFAULT_SIZE, SAMPLES_RANGE, SIZE_RANGE
 
     ld = sub.add_parser("lookdev", help="every preset on a shader ball under an HDRI, one labelled sheet (default)",
                         description="Render every preset (or --presets) on the look-dev shader ball under one of "
@@ -128,8 +140,6 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--report", default=None, metavar="FILE.json", help="also write the results as JSON")
     b.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
 
-    from .fit_options import add_parser as add_fit_parser
-
     add_fit_parser(sub)
     return parser
 
@@ -170,10 +180,6 @@ def _options(ns: argparse.Namespace, names: Sequence[str]) -> dict[str, Any]:
 
 def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``render``: validate, then render one request in this process."""
-    from .render_job import execute_render
-    from .requests import PARAM_NAMES, RUN_OPTIONS, request_from_options
-    from .runner import follow_parent
-
     follow_parent()
     req = request_from_options(_options(ns, RUN_OPTIONS + PARAM_NAMES))
     with blender_output(ns.verbose):
@@ -187,9 +193,7 @@ def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``gallery``: render the paper's configurations into one labelled contact sheet."""
-    from .gallery import render_gallery, settings_from_options, summary_rows
-
-    s = settings_from_options(_options(ns, ("output", "size", "samples", "backend", "columns", "sun",
+    s = gallery_settings(_options(ns, ("output", "size", "samples", "backend", "columns", "sun",
                                             "sun_strength", "seed", "threads", "presets")))
     with blender_output(ns.verbose):
         res = render_gallery(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv])
@@ -204,9 +208,7 @@ def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_lookdev(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``lookdev``: every preset on the shader ball, one labelled sheet."""
-    from .lookdev import render_lookdev, settings_from_options
-
-    s = settings_from_options(_options(ns, ("output", "size", "samples", "presets", "hdri", "columns")))
+    s = lookdev_settings(_options(ns, ("output", "size", "samples", "presets", "hdri", "columns")))
     with blender_output(ns.verbose):
         res = render_lookdev(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv], progress=ns.progress)
     rows = [[t["name"], t["label"][0], f"{t['render_seconds']:.1f}"] for t in res.tiles]
@@ -220,10 +222,6 @@ def cmd_lookdev(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_batch(ns: argparse.Namespace) -> int:
     """``batch``: run the jobs of a job file and print a summary table."""
-    from .job_files import load_job_file
-    from .requests import float_option, int_option
-    from .runner import check_report_target, exit_code, run_batch, write_report
-
     n_jobs = int_option("jobs", ns.jobs, 1, 4096)
     if ns.scheduler is not None and n_jobs > 1:
         raise ParameterError("jobs", n_jobs, "1 with --scheduler (the cluster's workers set the parallelism)")
@@ -257,10 +255,8 @@ def _hint(e: ParameterError, options: Collection[str]) -> str:
 
     Only for an option of the command that runs (``options``: its dests): a job file's
     ``output`` is no ``batch --output``, and a value read from a file
-    (:class:`~.requests.FileValueError`) names that file and its key instead.
+    (:class:`~.input_files.FileValueError`) names that file and its key instead.
     """
-    from .requests import FileValueError
-
     if isinstance(e, FileValueError) or e.name not in options:
         return ""
     if any(s.name == e.name for s in PARAM_SPECS) or e.name in ("sun_strength", "output", "resolution", "size",
@@ -299,8 +295,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         if ns.command == "gallery":
             return cmd_gallery(ns, argv)
         if ns.command == "fit":
-            from .fit_command import cmd_fit
-
             return cmd_fit(ns, argv)
         return cmd_lookdev(ns, argv)
     except ParameterError as e:

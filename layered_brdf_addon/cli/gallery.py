@@ -14,15 +14,18 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ..blender import tempdirs
 from ..model import policy
 from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects
 from ..model.presets import PAPER_PRESETS, preset
+from ..model.sphere import OrthoCamera, Sun
 from .codecs import to_srgb8
 from .option_values import check_preset_names, float_option, int_option, parse_sun
+from .render_job import render_outputs, sidecar
 from .requests import check_output
 from .sidecar import camera_to_dict, sun_to_dict
-from .staging import OutputPaths, output_stem
+from .staging import InterruptGuard, OutputPaths, output_stem
 
 SPACING = 2.2  # centre distance of neighbouring spheres (unit radius): a 10% margin per tile
 DEFAULT_SIZE = 128
@@ -140,10 +143,8 @@ def grid_centers(layout: GalleryLayout) -> tuple[tuple[float, float, float], ...
     return tuple(out)
 
 
-def grid_camera(layout: GalleryLayout):
+def grid_camera(layout: GalleryLayout) -> OrthoCamera:
     """The orthographic camera that gives every sphere a ``size`` x ``size`` pixel cell."""
-    from ..model.sphere import OrthoCamera
-
     return OrthoCamera(view=(0.0, -1.0, 0.0), ortho_scale=SPACING * max(layout.columns, layout.rows),
                        width=layout.columns * layout.size, height=layout.rows * layout.size)
 
@@ -184,9 +185,7 @@ class GallerySettings:
     threads: int = 2
     presets: tuple[str, ...] = tuple(PAPER_PRESETS)
 
-    def sun_light(self):
-        from ..model.sphere import Sun
-
+    def sun_light(self) -> Sun:
         default = Sun()
         return Sun(direction=self.sun or default.direction,
                    strength=default.strength if self.sun_strength is None else self.sun_strength)
@@ -252,18 +251,14 @@ def title_for(s: GallerySettings) -> str:
 def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
                    log: Callable[[str], None] | None = None) -> GalleryResult:
     """Render every preset of ``s`` in one scene and write the sheet, the EXR and a sidecar."""
-    from ..blender import tempdirs
-    from .render_job import render_outputs, sidecar
-    from .staging import InterruptGuard
-
     t_start = time.perf_counter()
     tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
     with InterruptGuard() as guard:
         guard.add_cleanup(tempdirs.remove_process_tempdir)
-        import bpy
+        import bpy  # after enter_process_tempdir: Blender makes its session folder in that folder
 
-        from ..blender import scene as S
-        from ..blender.material import apply_layered_material
+        from ..blender.material import apply_layered_material  # imports bpy, as above
+        from ..blender.scene import SceneSpec, build_scene, reset_blender  # imports bpy, as above
 
         params = [preset(n) for n in s.presets]
         labels = [label_lines(n, p) for n, p in zip(s.presets, params)]
@@ -271,10 +266,10 @@ def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
         layout = layout_for(labels, s.size, s.columns, title)
         centers = grid_centers(layout)
         camera, sun = grid_camera(layout), s.sun_light()
-        S.reset_blender()
+        reset_blender()
         guard.arm()
-        spheres = S.build_scene(S.SceneSpec(camera=camera, sun=sun, centers=centers, samples=s.samples,
-                                            threads=s.threads, seed=s.seed, osl=(s.backend == "osl")))
+        spheres = build_scene(SceneSpec(camera=camera, sun=sun, centers=centers, samples=s.samples,
+                                        threads=s.threads, seed=s.seed, osl=(s.backend == "osl")))
         scene = bpy.context.scene
         if s.samples > 1:
             scene.cycles.filter_width = ANTIALIAS_FILTER_WIDTH

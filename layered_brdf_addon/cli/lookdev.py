@@ -21,6 +21,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from .. import __version__
+from ..blender import tempdirs
 from ..model.params import ParameterError
 from ..model.policy import plan_effects
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
@@ -28,7 +30,9 @@ from .codecs import muted_stderr, save_png
 from .gallery import GalleryLayout, compose_sheet, layout_for
 from .option_values import check_preset_names, int_option
 from .render_job import view_png_encoding
-from .staging import StagedOutputs, TargetError, check_targets, output_stem, reading_back, writing
+from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, write_json
+from .staging import (InterruptGuard, StagedOutputs, TargetError, check_targets, output_stem, reading_back,
+                      writing)
 
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"
 DEFAULT_PRESETS = tuple(ARTIST_PRESETS) + tuple(PAPER_PRESETS)
@@ -123,7 +127,7 @@ def render_tiles(scene, layout: GalleryLayout, tiles: Sequence[tuple[str, Callab
     on the ball), into the linear grid of ``layout`` (the render boxes); returns the grid
     (H, W, 3) and each tile's render seconds.  The EXRs go to a temporary folder; one that
     cannot be read back (that folder's disk is full) is a :class:`~.staging.WriteError`."""
-    from ..blender import scene as S
+    from ..blender.scene import passes_from_exr, render_to_exr  # imports bpy: only when rendering
 
     size = layout.size
     sheet = np.zeros((layout.rows * size, layout.columns * size, 3), np.float32)
@@ -136,11 +140,11 @@ def render_tiles(scene, layout: GalleryLayout, tiles: Sequence[tuple[str, Callab
                 guard.check()
             setup()
             exr = Path(tmp_name) / f"{k}.exr"
-            seconds.append(S.render_to_exr(exr, scene, guard))
+            seconds.append(render_to_exr(exr, scene, guard))
             x0, y0, x1, y1 = layout.render_box(k)
             with guard.io() if guard is not None else contextlib.nullcontext(), \
                     reading_back(exr, tmp_name), muted_stderr():
-                sheet[y0:y1, x0:x1] = S.passes_from_exr(exr).beauty
+                sheet[y0:y1, x0:x1] = passes_from_exr(exr).beauty
             if bar is not None:
                 bar.update(1)
     return sheet, seconds
@@ -149,33 +153,28 @@ def render_tiles(scene, layout: GalleryLayout, tiles: Sequence[tuple[str, Callab
 def encode_sheet(scene, sheet: np.ndarray, layout: GalleryLayout, labels: Sequence[Sequence[str]],
                  title: str) -> np.ndarray:
     """The labelled sheet (8-bit RGB) of a linear grid, encoded by Blender with the scene's view settings."""
-    from ..blender import scene as S
+    from ..blender.scene import encode_view  # imports bpy: only when rendering
 
-    return np.asarray(compose_sheet(S.encode_view(sheet, scene), layout, labels, title))
+    return np.asarray(compose_sheet(encode_view(sheet, scene), layout, labels, title))
 
 
 def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, progress: bool = True,
                    log: Callable[[str], None] | None = None) -> LookdevResult:
     """Render every preset of ``s`` on the shader ball; write the labelled sheet and its sidecar."""
-    from ..blender import tempdirs
-    from .staging import InterruptGuard
-
     t_start = time.perf_counter()
     tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
     with InterruptGuard() as guard:
         guard.add_cleanup(tempdirs.remove_process_tempdir)
-        import bpy
+        import bpy  # after enter_process_tempdir: Blender makes its session folder in that folder
 
-        from ..blender import lookdev as L
-        from ..blender import scene as S
-        from ..blender.material import apply_layered_material
-        from .. import __version__
-        from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, write_json
+        from ..blender.lookdev import build_lookdev_scene, hdri_path  # imports bpy, as above
+        from ..blender.material import apply_layered_material  # imports bpy, as above
+        from ..blender.scene import reset_blender, view_settings_record  # imports bpy, as above
 
-        hdri = L.hdri_path(s.hdri)  # a bad name: ParameterError before anything is made
-        S.reset_blender()
+        hdri = hdri_path(s.hdri)  # a bad name: ParameterError before anything is made
+        reset_blender()
         guard.arm()
-        scene, ball = L.build_lookdev_scene(size=s.size, samples=s.samples, hdri=hdri.name)
+        scene, ball = build_lookdev_scene(size=s.size, samples=s.samples, hdri=hdri.name)
         labels = [tile_label(n) for n in s.presets]
         title = (f"layered-brdf look-dev \u00b7 {hdri.stem} HDRI + sun \u00b7 Cycles {s.samples} spp \u00b7 "
                  f"{scene.view_settings.view_transform}")
@@ -199,7 +198,7 @@ def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, pro
                   "render_seconds": seconds[k], "params": p.to_dict(), "plan": plan_effects(p).key}
                  for k, (n, p) in enumerate(zip(s.presets, params))]
         guard.check()
-        view = S.view_settings_record(scene)
+        view = view_settings_record(scene)
         pixels = encode_sheet(scene, sheet, layout, labels, title)
 
         data = {

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import contextlib
 import platform
+import shutil
 import socket
+import tempfile
 import time
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -19,6 +21,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from .. import __version__
+from ..blender import tempdirs
 from ..model.params import ParameterError
 from ..model.policy import plan_effects
 from .codecs import exr_beauty, muted_stderr, read_complete_exr_layers, replace_exr_layers, save_png, to_srgb8
@@ -70,7 +73,7 @@ def _open_blend(req: RenderRequest):
     if req.backend == "osl":
         c.device = "CPU"
         c.shading_system = True
-    from ..blender.scene import ensure_passes
+    from ..blender.scene import ensure_passes  # imports bpy: only when rendering
 
     ensure_passes(scene)
     return scene, obj
@@ -111,12 +114,8 @@ def _osl_aov_layers(scene, guard) -> dict[str, dict[str, Any]]:
 
     Their temporary files go to a private folder that an interrupt removes.
     """
-    import shutil
-    import tempfile
-
-    from ..blender import scene as S
-    from ..blender import tempdirs
-    from ..blender.material import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL
+    from ..blender.material import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL  # imports bpy: only when rendering
+    from ..blender.scene import render_passes_osl  # imports bpy: only when rendering
 
     tempdirs.sweep_stale()
     private = str(tempdirs.owned_dir("aov"))
@@ -125,7 +124,7 @@ def _osl_aov_layers(scene, guard) -> dict[str, dict[str, Any]]:
     saved = tempfile.tempdir
     tempfile.tempdir = private
     try:
-        p = S.render_passes_osl(scene)
+        p = render_passes_osl(scene)
     finally:
         tempfile.tempdir = saved
         cleanup()
@@ -170,7 +169,7 @@ def render_outputs(scene, paths: OutputPaths, guard: InterruptGuard, *,
     seconds)`` gives the sidecar.  ``osl_aovs`` adds the AOVs that Cycles does not write
     under OSL (rendered as emission passes, counted in the render time).
     """
-    from ..blender.scene import render_to_exr
+    from ..blender.scene import render_to_exr  # imports bpy: only when rendering
 
     with StagedOutputs(paths.all(), guard) as staged:
         exr_tmp = staged.temp(paths.exr)
@@ -221,16 +220,15 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
     are complete); SIGINT and SIGTERM stop the render at once and leave no file
     behind (exit code 130).  Returns the sidecar.
     """
-    from ..blender import tempdirs
-
     t_start = time.perf_counter()
     tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
     with InterruptGuard() as guard:
         guard.add_cleanup(tempdirs.remove_process_tempdir)
-        import bpy
+        import bpy  # after enter_process_tempdir: Blender makes its session folder in that folder
 
-        from ..blender import scene as S
-        from ..blender.material import animated_parameters, apply_layered_material
+        from ..blender.material import animated_parameters, apply_layered_material  # imports bpy, as above
+        from ..blender.scene import (SceneSpec, build_scene, encode_view, reset_blender,  # imports bpy, as above
+                                     view_settings_record)
 
         guard.arm()
         guard.check()
@@ -238,12 +236,12 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
             scene, target = _open_blend(req)
             camera_info, sun_info, centers = _blend_camera_dict(scene), None, None
         else:
-            S.reset_blender()
+            reset_blender()
             camera, sun = req.camera(), req.sun_light()
             centers = ((0.0, 0.0, 0.0),)
-            spec = S.SceneSpec(camera=camera, sun=sun, centers=centers, samples=req.samples,
-                               threads=req.threads, seed=req.seed, osl=(req.backend == "osl"))
-            target = S.build_scene(spec)[0]
+            spec = SceneSpec(camera=camera, sun=sun, centers=centers, samples=req.samples,
+                             threads=req.threads, seed=req.seed, osl=(req.backend == "osl"))
+            target = build_scene(spec)[0]
             scene = bpy.context.scene
             camera_info, sun_info = camera_to_dict(camera), sun_to_dict(sun)
         guard.arm()
@@ -262,12 +260,12 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
                 name=req.name, preset=req.preset, params_file=req.params_file, overrides=dict(req.overrides),
                 params=req.params.to_dict(), plan={**plan.to_dict(), "key": plan.key, "describe": plan.describe()},
                 blend=req.blend, object=req.object, lights=_blend_lights(scene) if req.blend else None,
-                exr_passes=EXR_PASSES, png_view=S.view_settings_record(scene) if req.blend else None,
-                png_encoding=view_png_encoding(S.view_settings_record(scene)) if req.blend else PNG_ENCODING)
+                exr_passes=EXR_PASSES, png_view=view_settings_record(scene) if req.blend else None,
+                png_encoding=view_png_encoding(view_settings_record(scene)) if req.blend else PNG_ENCODING)
 
         transparent = scene.render.film_transparent
         if req.blend:  # the PNG the .blend's own colour management gives (its view transform, look, exposure)
-            png = lambda rgb, a: S.encode_view(rgb, scene, a if transparent else None)  # noqa: E731
+            png = lambda rgb, a: encode_view(rgb, scene, a if transparent else None)  # noqa: E731
         else:  # the reference sphere: Standard, clipped
             png = lambda rgb, a: to_srgb8(rgb, a if transparent else None)  # noqa: E731
         data = render_outputs(scene, paths, guard, png=png, describe=describe, osl_aovs=req.backend == "osl")

@@ -19,6 +19,7 @@ from typing import Any, Iterable, Sequence
 
 from ..model.params import ParameterError
 from .job_files import Job
+from .sidecar import to_jsonable
 from .staging import OutputPaths, remove_stale_temps
 
 
@@ -370,8 +371,6 @@ def write_report(path: str | os.PathLike, data: Any) -> None:
     error nothing is left but the old report (OSError is raised).
     """
     import tempfile
-
-    from .sidecar import to_jsonable
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

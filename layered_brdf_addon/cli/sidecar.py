@@ -13,6 +13,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from ..model.params import LayeredParams
+from ..model.sphere import OrthoCamera, Sun
 from .staging import OutputPaths, output_stem
 
 SIDECAR_FORMAT = "layered-brdf render"
@@ -57,9 +59,7 @@ def camera_to_dict(camera) -> dict[str, Any]:
             "distance": camera.distance, "matrix_world": camera.matrix_world()}
 
 
-def camera_from_dict(d: Mapping[str, Any]):
-    from ..model.sphere import OrthoCamera
-
+def camera_from_dict(d: Mapping[str, Any]) -> OrthoCamera:
     return OrthoCamera(view=tuple(d["view"]), ortho_scale=float(d["ortho_scale"]), width=int(d["width"]),
                        height=int(d["height"]), target=tuple(d.get("target", (0.0, 0.0, 0.0))),
                        distance=float(d.get("distance", 10.0)))
@@ -69,9 +69,7 @@ def sun_to_dict(sun) -> dict[str, Any]:
     return {"direction": list(sun.direction), "l": sun.l, "strength": sun.strength, "angle": 0.0}
 
 
-def sun_from_dict(d: Mapping[str, Any]):
-    from ..model.sphere import Sun
-
+def sun_from_dict(d: Mapping[str, Any]) -> Sun:
     return Sun(direction=tuple(d["direction"]), strength=float(d["strength"]))
 
 
@@ -87,8 +85,6 @@ class SidecarScene:
 
 def scene_from_sidecar(data: Mapping[str, Any]) -> SidecarScene:
     """Parameters, camera, sun and sphere centres recorded by a reference-sphere render or the gallery."""
-    from ..model.params import LayeredParams
-
     if data.get("scene") not in ("reference", "gallery"):
         raise ValueError("only reference-sphere renders and galleries can be predicted "
                          f"(this sidecar's scene is {data.get('scene')!r})")
