@@ -33,12 +33,12 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 import colour  # noqa: E402
 import numpy as np  # noqa: E402
 
-from layered_brdf_addon.model import spectral as sp  # noqa: E402
-from layered_brdf_addon.model.brdf import diffuse_rho, specular_brdf  # noqa: E402
-from layered_brdf_reference.closures import closure_shading, single_lobe_shading  # noqa: E402
 from layered_brdf_addon.model.geometry import dot, reflect, refract  # noqa: E402
 from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams  # noqa: E402
 from layered_brdf_addon.model.presets import PRESETS  # noqa: E402
+from layered_brdf_reference import spectral  # noqa: E402
+from layered_brdf_reference.closures import closure_shading, single_lobe_shading  # noqa: E402
+from layered_brdf_reference.exact_model import diffuse_rho, specular_brdf  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results" / "accuracy.json"
 E0 = 130.0
@@ -99,31 +99,31 @@ def light_directions(sw: dict, r1: tuple[float, float, float]) -> tuple[np.ndarr
 ANALYTIC = "analytic"  # the analytic mode: three channels, interference integrated over each band
 
 
-def modes() -> dict[str, sp.SpectralSampling | str | None]:
+def modes() -> dict[str, spectral.SpectralSampling | str | None]:
     """The evaluated modes; ``None`` is the RGB mode (three wavelengths used as channels),
     :data:`ANALYTIC` the analytic mode (model/spectral_band.py)."""
-    out: dict[str, sp.SpectralSampling | str | None] = {"RGB (645/525/445 nm)": None,
-                                                        "analytic (closed-form band)": ANALYTIC}
-    for n in sp.SAMPLE_COUNTS:
-        out[f"spectral {n}"] = sp.spectral_sampling(n)
-    out["spectral 32, point-sampled"] = sp.spectral_sampling(32, "cie1931", "point")
-    out["spectral 32, Wyman CMF"] = sp.spectral_sampling(32, "wyman")
-    out["spectral 32, Wyman CMF, point-sampled"] = sp.spectral_sampling(32, "wyman", "point")
-    out["1 nm, Wyman CMF"] = sp.ground_truth_sampling("wyman")
+    out: dict[str, spectral.SpectralSampling | str | None] = {"RGB (645/525/445 nm)": None,
+                                                              "analytic (closed-form band)": ANALYTIC}
+    for n in spectral.SAMPLE_COUNTS:
+        out[f"spectral {n}"] = spectral.spectral_sampling(n)
+    out["spectral 32, point-sampled"] = spectral.spectral_sampling(32, "cie1931", "point")
+    out["spectral 32, Wyman CMF"] = spectral.spectral_sampling(32, "wyman")
+    out["spectral 32, Wyman CMF, point-sampled"] = spectral.spectral_sampling(32, "wyman", "point")
+    out["1 nm, Wyman CMF"] = spectral.ground_truth_sampling("wyman")
     return out
 
 
-def specular_rgb(mode: sp.SpectralSampling | str | None, i, o, n0, n1, r1, d) -> np.ndarray:
+def specular_rgb(mode: spectral.SpectralSampling | str | None, i, o, n0, n1, r1, d) -> np.ndarray:
     norm = (E0 + 2.0) / (2.0 * np.pi)
     if mode is None or mode == ANALYTIC:
         return specular_brdf(i, o, n0, n1, r1, d, E0, E1, R0, WAVELENGTHS_NM, n0, band=mode == ANALYTIC) / norm
-    return sp.spectral_specular(i, o, n0, n1, r1, d, E0, E1, R0, mode, n0) / norm
+    return spectral.spectral_specular(i, o, n0, n1, r1, d, E0, E1, R0, mode, n0) / norm
 
 
-def diffuse_rgb(mode: sp.SpectralSampling | str | None, r1, d) -> np.ndarray:
+def diffuse_rgb(mode: spectral.SpectralSampling | str | None, r1, d) -> np.ndarray:
     if mode is None or mode == ANALYTIC:
         return diffuse_rho(r1, d, R0, WAVELENGTHS_NM, band=mode == ANALYTIC)
-    return sp.spectral_diffuse(r1, d, R0, mode)
+    return spectral.spectral_diffuse(r1, d, R0, mode)
 
 
 def stats(de: np.ndarray, rgb_diff: np.ndarray | None = None) -> dict:
@@ -157,7 +157,7 @@ def closure_rgb(kind: str, r1, sw: dict, l: np.ndarray) -> np.ndarray:
 
 def accuracy(sw: dict) -> dict:
     triples = preset_index_triples()
-    gt = sp.ground_truth_sampling()
+    gt = spectral.ground_truth_sampling()
     mode_map = modes()
     spec_de = {m: [] for m in mode_map}
     spec_diff = {m: [] for m in mode_map}
@@ -185,11 +185,11 @@ def accuracy(sw: dict) -> dict:
         rgb_exact = None
         for name, mode in mode_map.items():
             val = specular_rgb(mode, i, sw["o"], sw["n0"], sw["n1"], r1, sw["dd"])
-            de = sp.delta_e_2000(val, ref)
+            de = spectral.delta_e_2000(val, ref)
             spec_de[name].append(de)
             spec_diff[name].append(np.abs(val - ref).max(axis=-1))
             vd = diffuse_rgb(mode, r1, sw["d"])
-            dde = sp.delta_e_2000(vd, ref_d)
+            dde = spectral.delta_e_2000(vd, ref_d)
             diff_de[name].append(dde)
             diff_diff[name].append(np.abs(vd - ref_d).max(axis=-1))
             min_rgb[name] = min(min_rgb[name], float(val.min()), float(vd.min()))
@@ -199,8 +199,8 @@ def accuracy(sw: dict) -> dict:
                 rgb_exact = val
         for label, kind in closure_kinds.items():
             val = closure_rgb(kind, r1, sw, l)
-            clo_de[label].append(sp.delta_e_2000(val, ref))
-            clo_de_rgb[label].append(sp.delta_e_2000(val, rgb_exact))
+            clo_de[label].append(spectral.delta_e_2000(val, ref))
+            clo_de_rgb[label].append(spectral.delta_e_2000(val, rgb_exact))
         clo_tilted.append(sw["tilt"] != 0.0)
     cat = np.concatenate
     tilted = cat(clo_tilted)
@@ -247,7 +247,7 @@ def throughput(points: int = 4096, repeats: int = 5) -> dict:
         return points / t
 
     out = {}
-    gt = sp.ground_truth_sampling()
+    gt = spectral.ground_truth_sampling()
     for name, mode in {**modes(), "ground truth 1 nm": gt}.items():
         out[name] = dict(specular=best(lambda: specular_rgb(mode, i, o, n0, n1, r1, d)),
                          diffuse=best(lambda: diffuse_rgb(mode, r1, d)))
@@ -267,31 +267,31 @@ def cutoffs() -> dict:
         m_diffuse = 2.0 * np.sqrt(td * (1.0 - td))
         row = dict(r1=r1, diffuse_modulation=m_diffuse)
         for tol in (0.5, 1.0, 2.0):
-            d_star = sp.interference_cutoff_nm(r1, tol)
+            d_star = spectral.interference_cutoff_nm(r1, tol)
             row[f"d_star_tol{tol:g}"] = d_star
-            row[f"periods_tol{tol:g}"] = float(sp.phase_spread(r1, d_star) / (2.0 * np.pi))
-        row["d_star_diffuse_tol1"] = sp.interference_cutoff_nm(r1, 1.0, modulation=m_diffuse)
+            row[f"periods_tol{tol:g}"] = float(spectral.phase_spread(r1, d_star) / (2.0 * np.pi))
+        row["d_star_diffuse_tol1"] = spectral.interference_cutoff_nm(r1, 1.0, modulation=m_diffuse)
         rows.append(row)
-    return dict(rows=rows, optical_tol1=sp.interference_cutoff_optical_nm(1.0),
-                optical_tol1_wyman=sp.interference_cutoff_optical_nm(1.0, cmf="wyman"))
+    return dict(rows=rows, optical_tol1=spectral.interference_cutoff_optical_nm(1.0),
+                optical_tol1_wyman=spectral.interference_cutoff_optical_nm(1.0, cmf="wyman"))
 
 
 def thick_layers(r1=(1.5, 1.5, 1.5), bands=((1000.0, 2000.0), (2000.0, 3000.0), (3000.0, 4000.0), (4000.0, 6000.0)),
                  step: float = 2.0) -> dict:
     """Diffuse ``rho_d`` of thick layers: CIEDE2000 to the ground truth of the spectral modes and
     of the interference-free mean (``rho_d = 1``, what a planner would use beyond ``d*``)."""
-    gt = sp.ground_truth_sampling()
+    gt = spectral.ground_truth_sampling()
     out = {}
     for lo, hi in bands:
         d = np.arange(lo, hi, step)
         ref = diffuse_rgb(gt, r1, d)
         row = {}
         for n in (16, 32):
-            de = sp.delta_e_2000(diffuse_rgb(sp.spectral_sampling(n), r1, d), ref)
+            de = spectral.delta_e_2000(diffuse_rgb(spectral.spectral_sampling(n), r1, d), ref)
             row[f"spectral {n}"] = dict(mean=float(de.mean()), max=float(de.max()))
-        de = sp.delta_e_2000(diffuse_rgb(ANALYTIC, r1, d), ref)
+        de = spectral.delta_e_2000(diffuse_rgb(ANALYTIC, r1, d), ref)
         row["analytic"] = dict(mean=float(de.mean()), max=float(de.max()))
-        de = sp.delta_e_2000(np.ones_like(ref), ref)
+        de = spectral.delta_e_2000(np.ones_like(ref), ref)
         row["mean colour"] = dict(mean=float(de.mean()), max=float(de.max()))
         out[f"{lo:g}-{hi:g}"] = row
     return dict(r1=list(r1), bands=out)
@@ -381,10 +381,10 @@ def main(argv=None) -> int:
     res = dict(accuracy=accuracy(sw), throughput=throughput(args.points), cutoffs=cutoffs(),
                thick_layers=thick_layers())
     res["white_correction"] = {s.label: s.white_correction.tolist() for s in
-                               (sp.ground_truth_sampling(), sp.spectral_sampling(32, "cie1931", "point"),
-                                sp.ground_truth_sampling("wyman"), sp.spectral_sampling(32, "wyman"),
-                                sp.spectral_sampling(32, "wyman", "point"))}
-    res["wyman_table_error"] = sp.wyman_table_error()
+                               (spectral.ground_truth_sampling(), spectral.spectral_sampling(32, "cie1931", "point"),
+                                spectral.ground_truth_sampling("wyman"), spectral.spectral_sampling(32, "wyman"),
+                                spectral.spectral_sampling(32, "wyman", "point"))}
+    res["wyman_table_error"] = spectral.wyman_table_error()
     res["setup"] = dict(thickness_nm=sw["d"].tolist(), view_deg=sw["views"].tolist(), tilt_deg=sw["tilts"].tolist(),
                         e0=E0, e1=E1, r0=R0, configurations_per_triple=int(sw["dd"].shape[0]),
                         light="mirror for tilt 0; green transmitted-lobe peak for tilt != 0 (mirror if no path)",

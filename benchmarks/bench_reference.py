@@ -13,9 +13,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from layered_brdf_addon.model import specular_brdf  # noqa: E402
-from layered_brdf_addon.model.brdf import layered_brdf  # noqa: E402
 from layered_brdf_addon.model.params import LayeredParams  # noqa: E402
+from layered_brdf_reference.exact_model import layered_brdf, specular_brdf  # noqa: E402
 
 
 def random_unit(rng, n, up=False):

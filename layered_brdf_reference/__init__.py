@@ -1,5 +1,10 @@
 """Test oracles of layered-brdf: what a render should look like, computed in numpy.
 
+* :mod:`.exact_model`: the exact layered BRDF of Granier & Heidrich (2003) in every
+  accuracy mode, what the shaders approximate; :mod:`.exact_spheres`: it on the reference
+  scene's spheres;
+* :mod:`.spectral`: the 1 nm spectral ground truth (colour-science) and the writer of the
+  shaders' baked spectral tables;
 * :mod:`.closures`: the numpy twin of Cycles' evaluation of the closures the shaders
   return (the *closure form*), to predict renders pixel by pixel;
 * :mod:`.lighting`: Monte-Carlo integration of the model under an environment or an

@@ -13,9 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from layered_brdf_addon.model import spectral as sp
-from layered_brdf_addon.model.brdf import channel_cosine
 from layered_brdf_addon.model.spectral_band import PATH, SLOTS, band_fit, derived_rows, per_channel
+
+from . import spectral
+from .exact_model import channel_cosine
 
 FIT_OPD_MAX_NM = 8000.0  # the fit's range of optical path difference
 FIT_OPD_STEP_NM = 4.0
@@ -32,7 +33,7 @@ def channel_cosine_numeric(opd_nm, r1_rgb=None, slope_nm=None) -> np.ndarray:
     ``D + slope (r1(lambda) - r1_c)`` (``slope_nm`` = ``dD/dr1``, shape like ``opd_nm``),
     exact for eq. 18 (``D = 2 r1 d``, slope ``2 d``) and the first order of eq. 3.
     """
-    gt = sp.ground_truth_sampling()
+    gt = spectral.ground_truth_sampling()
     lam, M = gt.wavelengths, gt.matrix
     D = per_channel(opd_nm)
     out = np.empty(D.shape)
@@ -41,7 +42,7 @@ def channel_cosine_numeric(opd_nm, r1_rgb=None, slope_nm=None) -> np.ndarray:
             out[..., c] = np.cos(2.0 * np.pi * D[..., c, None] / lam) @ M[:, c]
         return out
     r1 = np.asarray(r1_rgb, dtype=float)
-    r_lam = sp.index_at(sp.cauchy_fit(r1), lam)  # (N,) for one triple
+    r_lam = spectral.index_at(spectral.cauchy_fit(r1), lam)  # (N,) for one triple
     S = per_channel(slope_nm, D.shape)
     for c in range(3):
         path = D[..., c, None] + S[..., c, None] * (r_lam - r1[c])

@@ -9,9 +9,10 @@ from layered_brdf_addon.fit.cycles_closures import (  # noqa: F401  (the referen
     CLOSURE_WEIGHT_CUTOFF, INV_2PI, beckmann_eval, beckmann_lambda, closure_shading, ensure_valid_specular_reflection,
     evaluate_closures, glossy_alphas, phong_peak, phong_ramp_eval, program_inputs, shade_closures)
 from layered_brdf_addon.model import program
-from layered_brdf_addon.model.brdf import diffuse_rho, specular_brdf
 from layered_brdf_addon.model.geometry import dot
 from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
+
+from .exact_model import diffuse_rho, specular_brdf
 
 
 def single_lobe_shading(params: LayeredParams, n0, n1, d, l, v, exponent=None, wavelengths=WAVELENGTHS_NM,

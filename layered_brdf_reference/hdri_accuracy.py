@@ -2,7 +2,7 @@
 
 A sphere's pixels are lit by one of Blender's bundled HDRIs (equirectangular, mapped as
 Blender's Environment Texture maps it); each pixel is integrated by Monte Carlo over light
-directions, the exact model (:func:`layered_brdf_addon.model.brdf.layered_brdf`) and the
+directions, the exact model (:func:`.exact_model.layered_brdf`) and the
 closure form (:func:`.closures.closure_shading`) on the *same* directions, so their
 difference is the closure form's error, not noise.  The noise thickness pattern has no numpy
 twin: thickness follows the height pattern over the preset's range.

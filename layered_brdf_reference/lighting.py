@@ -7,9 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from layered_brdf_addon.model.brdf import layered_brdf
 from layered_brdf_addon.model.geometry import dot, reflect, safe_normalize
 from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
+
+from .exact_model import layered_brdf
 
 
 def _frame(n):

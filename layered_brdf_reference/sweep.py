@@ -3,7 +3,7 @@
 Each configuration is one unit sphere seen by an orthographic camera and lit by a
 zero-angle sun (:func:`layered_brdf_addon.model.sphere.render_spheres`), rendered twice:
 with :func:`~layered_brdf_reference.closures.closure_shading` (what the shaders return,
-as Cycles evaluates it) and with the exact model (:func:`~layered_brdf_addon.model.sphere.exact_shading`
+as Cycles evaluates it) and with the exact model (:func:`~.exact_spheres.exact_shading`
 for ``accuracy="rgb"``, :func:`spectral_exact_shading` with the same wavelength sampling
 for the spectral modes).  The whole sphere image is compared, so every view angle out to
 the silhouette is covered.
@@ -43,15 +43,16 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from layered_brdf_addon.model import spectral as sp
 from layered_brdf_addon.model.geometry import dot
 from layered_brdf_addon.model.params import ACCURACY_MODES, LayeredParams
 from layered_brdf_addon.model.policy import spectral_count
 from layered_brdf_addon.model.presets import PRESETS
-from layered_brdf_addon.model.sphere import OrthoCamera, Sun, exact_shading, render_spheres
+from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
 
+from . import spectral
 from .closures import closure_shading
 from .compare import highlight_mask, relative_l1
+from .exact_spheres import exact_shading
 
 HIGHLIGHT_FRACTION = 0.05  # highlight: exact above 5% of its maximum
 HOLE_FRACTION = 0.20  # hole: closure below 20% of exact in the highlight
@@ -198,12 +199,12 @@ def spectral_exact_shading(params: LayeredParams, n0, n1, d, l, v):
     n = spectral_count(params.accuracy)
     if not n:
         return exact_shading(params, n0, n1, d, l, v)
-    s = sp.spectral_sampling(n)
+    s = spectral.spectral_sampling(n)
     cos_l = np.maximum(dot(n0, l), 0.0)
     i = np.broadcast_to(-np.asarray(l, dtype=float), np.shape(n0))
     o = np.broadcast_to(np.asarray(v, dtype=float), np.shape(n0))
-    fs = sp.spectral_specular(i, o, n0, n1, params.r1, d, params.e0, params.e1, params.r0, s, ng=n0)
-    fd = sp.spectral_diffuse(params.r1, d, params.r0, s) * np.asarray(params.base_color) / np.pi
+    fs = spectral.spectral_specular(i, o, n0, n1, params.r1, d, params.e0, params.e1, params.r0, s, ng=n0)
+    fd = spectral.spectral_diffuse(params.r1, d, params.r0, s) * np.asarray(params.base_color) / np.pi
     return cos_l[..., None] * (params.ks * fs + params.kd * fd)
 
 
@@ -214,7 +215,7 @@ def camera(resolution: int) -> OrthoCamera:
 # --------------------------------------------------------------------------
 # Metrics.
 def _luminance(rgb) -> np.ndarray:
-    return sp.rgb_to_xyz(rgb)[..., 1]
+    return spectral.rgb_to_xyz(rgb)[..., 1]
 
 
 def image_metrics(closure: np.ndarray, exact: np.ndarray, geo, l) -> dict:
@@ -235,7 +236,7 @@ def image_metrics(closure: np.ndarray, exact: np.ndarray, geo, l) -> dict:
     energy_rgb = c_tot / np.maximum(e_tot, floor)
     y_peak = float(_luminance(exact[sphere]).max())
     scale = 1.0 / y_peak if y_peak > 0.0 else 1.0 / peak
-    de = sp.delta_e_2000(closure * scale, exact * scale)
+    de = spectral.delta_e_2000(closure * scale, exact * scale)
     return dict(
         l1=relative_l1(closure, exact, hl),
         l1_sphere=relative_l1(closure, exact, sphere),

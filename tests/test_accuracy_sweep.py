@@ -8,10 +8,10 @@ from functools import partial
 import numpy as np
 import pytest
 
-from layered_brdf_addon.model.brdf import specular_brdf
 from layered_brdf_addon.model.params import LayeredParams
-from layered_brdf_reference import sweep as S
+from layered_brdf_reference import sweep
 from layered_brdf_reference.closures import closure_shading
+from layered_brdf_reference.exact_model import specular_brdf
 
 RESOLUTION = 32
 RGB_CONFIGURATIONS = 60
@@ -45,17 +45,17 @@ FINITE_KEYS = ("l1", "l1_sphere", "energy", "de_lit", "de_highlight")
 
 @pytest.fixture(scope="module")
 def rgb_configs():
-    return S.design(RGB_CONFIGURATIONS)
+    return sweep.design(RGB_CONFIGURATIONS)
 
 
 @pytest.fixture(scope="module")
 def rgb_rows(rgb_configs):
-    return S.run(rgb_configs, RESOLUTION)
+    return sweep.run(rgb_configs, RESOLUTION)
 
 
 @pytest.fixture(scope="module")
 def spectral_rows():
-    return S.run(S.spectral_design(SPECTRAL_BASE), RESOLUTION)
+    return sweep.run(sweep.spectral_design(SPECTRAL_BASE), RESOLUTION)
 
 
 def _finite(m: dict) -> bool:
@@ -70,27 +70,27 @@ def test_design_spans_the_ranges(rgb_configs):
         v = [getattr(c, key) for c in cs]
         assert min(v) < 15.0 and max(v) > 700.0
     r1 = [x for c in cs for x in c.r1]
-    assert min(r1) >= S.INDEX[0] and max(r1) <= S.INDEX[1]
+    assert min(r1) >= sweep.INDEX[0] and max(r1) <= sweep.INDEX[1]
     assert {c.dispersive for c in cs} == {True, False}
     assert {c.normal_mode for c in cs} == {"parallel", "tilted", "correlated"}
     tilts = [c.tilt for c in cs if c.normal_mode == "tilted"]
     assert min(tilts) < 3.0 and max(tilts) > 27.0
     d = [x for c in cs for x in (c.d_min, c.d_max)]
     assert min(d) < 30.0 and max(d) > 950.0
-    assert S.design(RGB_CONFIGURATIONS) == cs  # seeded
-    modes = {c.accuracy for c in S.spectral_design(SPECTRAL_BASE)}
-    assert modes == set(S.ACCURACY_MODES)
+    assert sweep.design(RGB_CONFIGURATIONS) == cs  # seeded
+    modes = {c.accuracy for c in sweep.spectral_design(SPECTRAL_BASE)}
+    assert modes == set(sweep.ACCURACY_MODES)
 
 
 def test_every_metric_is_finite(rgb_rows, spectral_rows):
     for r in rgb_rows + spectral_rows:
         m = r["metrics"]
-        assert _finite(m), (S.describe(r["config"]), m)
+        assert _finite(m), (sweep.describe(r["config"]), m)
         assert m["highlight_pixels"] > 0 and 0 <= m["holes"] <= m["highlight_pixels"]
 
 
 def test_rgb_accuracy_no_worse_than_measured(rgb_rows):
-    s = S.summarise(rgb_rows)
+    s = sweep.summarise(rgb_rows)
     print(f"RGB: L1 p50 {s.l1_p50:.3f} p95 {s.l1_p95:.3f} max {s.l1_max:.3f}; over 20% {s.over_20}; "
           f"holes {s.holes}, ghosts {s.ghosts}")
     assert s.l1_p50 <= MAX_RGB_L1_P50
@@ -101,14 +101,14 @@ def test_rgb_accuracy_no_worse_than_measured(rgb_rows):
 
 
 def test_spectral_accuracy_no_worse_than_measured(spectral_rows):
-    for mode, s in S.groups(spectral_rows, lambda c: c["accuracy"]).items():
+    for mode, s in sweep.groups(spectral_rows, lambda c: c["accuracy"]).items():
         print(f"{mode}: L1 p95 {s.l1_p95:.3f}, holes {s.holes}")
         assert s.l1_p95 <= MAX_SPECTRAL_L1_P95, mode
         assert s.holes <= MAX_SPECTRAL_HOLES, mode
 
 
 def test_presets_no_worse_than_measured():
-    for r in S.preset_rows(RESOLUTION):
+    for r in sweep.preset_rows(RESOLUTION):
         m = r["metrics"]
         assert _finite(m) and _finite(r["specular_only"]), r["name"]
         assert m["l1"] <= MAX_PRESET_L1.get(r["name"], MAX_PRESET_L1_DEFAULT), (r["name"], m["l1"])
@@ -125,7 +125,7 @@ def _scaled(shading, k):
 def _exact_with_light(transform):
     """The exact model lit from a transformed sun: a highlight in the wrong place."""
     def f(params, n0, n1, d, l, v, **kwargs):
-        return S.spectral_exact_shading(params, n0, n1, d, transform(np.asarray(l, dtype=float)), v)
+        return sweep.spectral_exact_shading(params, n0, n1, d, transform(np.asarray(l, dtype=float)), v)
     return f
 
 
@@ -133,13 +133,13 @@ def _exact_with_light(transform):
 def probe(rgb_configs):
     """A few configurations (parallel and tilted, dispersive and not), with their rows."""
     picked = [c for c in rgb_configs if c.normal_mode != "correlated"][:8]
-    return picked, S.run(picked, RESOLUTION)
+    return picked, sweep.run(picked, RESOLUTION)
 
 
 def test_exact_against_itself_is_perfect(probe):
     configs, _ = probe
     for c in configs:
-        m = S.evaluate(c, RESOLUTION, closure=S.spectral_exact_shading)
+        m = sweep.evaluate(c, RESOLUTION, closure=sweep.spectral_exact_shading)
         assert m["l1"] == 0.0 and m["energy"] == pytest.approx(1.0, abs=1e-12) and m["holes"] == 0
         assert m["de_lit"] == pytest.approx(0.0, abs=1e-9)
 
@@ -147,13 +147,13 @@ def test_exact_against_itself_is_perfect(probe):
 def test_half_of_exact_reads_half(probe):
     configs, _ = probe
     for c in configs:
-        m = S.evaluate(c, RESOLUTION, closure=_scaled(S.spectral_exact_shading, 0.5))
+        m = sweep.evaluate(c, RESOLUTION, closure=_scaled(sweep.spectral_exact_shading, 0.5))
         assert m["l1"] == pytest.approx(0.5, abs=1e-9)
         assert m["energy"] == pytest.approx(0.5, abs=1e-9)
         np.testing.assert_allclose(m["energy_rgb"], 0.5, atol=1e-9)
         assert m["holes"] == 0  # 50% is not a hole
         assert m["de_highlight"] > 5.0  # half the luminance is a visible difference
-        tenth = S.evaluate(c, RESOLUTION, closure=_scaled(S.spectral_exact_shading, 0.1))
+        tenth = sweep.evaluate(c, RESOLUTION, closure=_scaled(sweep.spectral_exact_shading, 0.1))
         assert tenth["holes"] == tenth["highlight_pixels"] and tenth["l1"] == pytest.approx(0.9, abs=1e-9)
 
 
@@ -163,14 +163,14 @@ def test_half_of_the_closure_form_reads_about_half(probe):
     configs, rows = probe
     for c, r in zip(configs, rows):
         a = r["metrics"]
-        m = S.evaluate(c, RESOLUTION, closure=_scaled(closure_shading, 0.5))
-        assert abs(m["l1"] - 0.5) <= 0.5 * a["l1"] + 1e-9, S.describe(r["config"])
+        m = sweep.evaluate(c, RESOLUTION, closure=_scaled(closure_shading, 0.5))
+        assert abs(m["l1"] - 0.5) <= 0.5 * a["l1"] + 1e-9, sweep.describe(r["config"])
         assert m["energy"] == pytest.approx(0.5 * a["energy"], rel=1e-9)
         assert m["holes"] >= a["holes"]
     accurate = [(c, r) for c, r in zip(configs, rows) if r["metrics"]["l1"] < 0.1]
     assert accurate, "the probe should hold a configuration the closure form gets right"
     for c, r in accurate:
-        m = S.evaluate(c, RESOLUTION, closure=_scaled(closure_shading, 0.5))
+        m = sweep.evaluate(c, RESOLUTION, closure=_scaled(closure_shading, 0.5))
         assert m["l1"] == pytest.approx(0.5, abs=0.05) and m["energy"] == pytest.approx(0.5, abs=0.06)
 
 
@@ -179,10 +179,10 @@ def test_a_misplaced_highlight_is_holes_not_energy():
     the energy is unchanged (a parallel layer of constant thickness is symmetric), but the
     highlight is empty (holes, L1 near 100%), the light is elsewhere (ghosts) and the L1 over the
     sphere near 200%."""
-    c = S.SweepConfig(elevation=45.0, sun_azimuth=0.0, e0=200.0, e1=200.0, r1=(1.5, 1.5, 1.5),
-                      normal_mode="parallel", tilt=0.0, d_min=300.0, d_max=300.0)
+    c = sweep.SweepConfig(elevation=45.0, sun_azimuth=0.0, e0=200.0, e1=200.0, r1=(1.5, 1.5, 1.5),
+                          normal_mode="parallel", tilt=0.0, d_min=300.0, d_max=300.0)
     mirror = partial(np.multiply, np.array([-1.0, 1.0, 1.0]))  # sun at azimuth 0 is on +x
-    m = S.evaluate(c, RESOLUTION, closure=_exact_with_light(mirror))
+    m = sweep.evaluate(c, RESOLUTION, closure=_exact_with_light(mirror))
     assert m["energy"] == pytest.approx(1.0, abs=0.02)
     assert m["holes"] == m["highlight_pixels"] > 0
     assert m["l1"] > 0.95 and m["l1_sphere"] > 1.8

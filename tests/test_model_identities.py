@@ -2,9 +2,8 @@
 import numpy as np
 import pytest
 
-from layered_brdf_addon.model import (average_refracted_cosine, diffuse_rd, diffuse_td, fresnel_f0, refract,
-                                      reflect, schlick)
-from layered_brdf_addon.model.geometry import dot
+from layered_brdf_addon.model.geometry import dot, reflect, refract
+from layered_brdf_reference.exact_model import average_refracted_cosine, diffuse_rd, diffuse_td, fresnel_f0, schlick
 
 MU, W = np.polynomial.legendre.leggauss(400)
 MU = 0.5 * (MU + 1.0)  # Gauss-Legendre nodes on [0, 1]

@@ -90,7 +90,7 @@ def test_dropping_an_active_effect_changes_the_image(pairs):
 
 
 def test_interference_cutoff_constant_matches_its_measurement():
-    from layered_brdf_addon.model import spectral
+    from layered_brdf_reference import spectral
     from layered_brdf_addon.model.policy import INTERFERENCE_CUTOFF_OPTICAL_NM
 
     assert spectral.interference_cutoff_optical_nm(1.0) == pytest.approx(INTERFERENCE_CUTOFF_OPTICAL_NM, rel=0.01)
@@ -110,7 +110,7 @@ def test_thick_spectral_layers_drop_interference_thin_and_rgb_keep_it():
 def test_dropping_averaged_interference_changes_little_and_matches_closure_form(backend):
     """Past the cut-off the band-averaged image without the interference term stays within
     a few per cent of the full spectral shader (the cut-off is 1 CIEDE2000 on colour)."""
-    from layered_brdf_reference import closures as C
+    from layered_brdf_reference import closures
     from layered_brdf_addon.model import render_spheres
     from layered_brdf_reference.compare import agreement, lit_mask
 
@@ -120,7 +120,7 @@ def test_dropping_averaged_interference_changes_little_and_matches_closure_form(
     assert planned.interference is False
     full = EffectPlan(**{**planned.to_dict(), "interference": True})
     row = render_row([p, p], backend=backend, plans=[planned, full], height=48)
-    expected, geo = render_spheres([p], row.camera, row.sun, row.centers[:1], shading=C.closure_shading)
+    expected, geo = render_spheres([p], row.camera, row.sun, row.centers[:1], shading=closures.closure_shading)
     mask = lit_mask(geo, row.sun.l) & (geo.sphere == 0)
     ag = agreement(row.passes.beauty, expected, mask, rel_tol=REL_TOL)
     assert ag.failing_fraction <= MAX_FAILING, str(ag)

@@ -4,10 +4,10 @@ from functools import partial
 import numpy as np
 import pytest
 
-from layered_brdf_reference import closures as C
 from layered_brdf_addon.model import preset, render_spheres
+from layered_brdf_reference import closures
 from layered_brdf_reference.compare import agreement, centroids, highlight_mask, lit_mask, relative_l1
-from layered_brdf_addon.model.sphere import exact_shading
+from layered_brdf_reference.exact_spheres import exact_shading
 
 from constants import MAX_FAILING, REL_TOL, REL_TOL_DIFFUSE
 from render_helpers import render_row
@@ -77,7 +77,7 @@ def test_noise_thickness_aov_and_diffuse_colour(row):
 
 def test_parallel_specular_matches_closure_form_and_beats_single_lobe(row):
     p = CASES["parallel"]
-    closure, geo = _expected(row, shading=partial(C.closure_shading))
+    closure, geo = _expected(row, shading=partial(closures.closure_shading))
     mask = lit_mask(geo, row.sun.l) & _sphere(geo, "parallel")
     ag = agreement(row.passes.beauty, closure, mask, rel_tol=REL_TOL)
     assert ag.failing_fraction <= MAX_FAILING, str(ag)
@@ -86,7 +86,7 @@ def test_parallel_specular_matches_closure_form_and_beats_single_lobe(row):
     ours = relative_l1(closure, exact, hl)
     baselines = {}
     for e in [p.e0] + list(np.arange(40.0, 161.0, 5.0)):
-        single, _ = _expected(row, shading=partial(C.single_lobe_shading, exponent=e))
+        single, _ = _expected(row, shading=partial(closures.single_lobe_shading, exponent=e))
         baselines[e] = relative_l1(single, exact, hl)
     best = min(baselines.values())
     print(f"closure form vs exact: {ours:.4f}; single lobe at e0: {baselines[p.e0]:.4f}, best: {best:.4f}")

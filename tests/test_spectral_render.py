@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.model import preset
-from layered_brdf_reference import closures as C
-from layered_brdf_addon.model.spectral import shader_tables
 from layered_brdf_addon.model.spectral_tables import PATH, SAMPLE_COUNTS
 from layered_brdf_addon.model.sphere import OrthoCamera, render_spheres
+from layered_brdf_reference import closures
+from layered_brdf_reference.spectral import shader_tables
 
 from constants import MAX_FAILING, REL_TOL, SUN_40
 
@@ -30,7 +30,7 @@ def test_spectral_closure_form_converges_to_32_wavelengths():
     imgs = {}
     for a in ("spectral8", "spectral16", "spectral32"):
         p = preset("fig6_medium").replace(thickness_mode="height", accuracy=a)
-        imgs[a], geo = render_spheres(p, cam, sun, shading=C.closure_shading)
+        imgs[a], geo = render_spheres(p, cam, sun, shading=closures.closure_shading)
         assert np.all(np.isfinite(imgs[a])) and np.all(imgs[a] >= 0)
     e8 = np.abs(imgs["spectral8"] - imgs["spectral32"]).sum()
     e16 = np.abs(imgs["spectral16"] - imgs["spectral32"]).sum()
@@ -60,7 +60,7 @@ def test_spectral_shaders_match_closure_form(backend, kd):
     if backend == "osl":
         cases.append(cases[1].replace(lobe="phong"))
     row = render_row(cases, backend=backend, height=48)
-    expected, geo = render_spheres(row.params, row.camera, row.sun, row.centers, shading=C.closure_shading)
+    expected, geo = render_spheres(row.params, row.camera, row.sun, row.centers, shading=closures.closure_shading)
     for k, p in enumerate(cases):
         mask = lit_mask(geo, row.sun.l) & (geo.sphere == k)
         ag = agreement(row.passes.beauty, expected, mask, rel_tol=REL_TOL)

@@ -235,7 +235,8 @@ def evaluate_closures(result, n0, v, l, lobe_kind="beckmann", ng=None, bump_corr
 
 def closure_shading(params: LayeredParams | Mapping, n0, n1, d, l, v, wavelengths=WAVELENGTHS_NM, ng=None,
                     plan: EffectPlan | None = None):
-    """What the shaders render per unit sun irradiance (same signature as ``exact_shading``).
+    """What the shaders render per unit sun irradiance (same signature as
+    ``layered_brdf_reference.exact_spheres.exact_shading``).
 
     ``params`` may be the values of a stack of parameter sets (:func:`stacked_values`, with
     their ``plan``): the result then has the stack's leading axis."""

@@ -4,8 +4,8 @@ Both interference terms of the model are a cosine of an optical path difference 
 over the wavelength: ``cos(2 Phi) = cos(2 pi D / lambda)`` with ``D = r1 d (s_i + s_o)``
 (eq. 3; ``s`` the refracted cosines) and ``cos(4 pi r1 d / lambda)`` with ``D = 2 r1 d``
 (eq. 18).  Seen through a linear Rec.709 channel ``c`` of the spectral ground truth (1 nm,
-CIE 1931 under D65, model/spectral.py), a term ``A + B cos(2 pi D / lambda)`` whose ``A``
-and ``B`` vary slowly with the wavelength is ``A + B C_c(D)`` with
+CIE 1931 under D65, layered_brdf_reference/spectral.py), a term ``A + B cos(2 pi D /
+lambda)`` whose ``A`` and ``B`` vary slowly with the wavelength is ``A + B C_c(D)`` with
 
     C_c(D) = sum_lambda M[lambda, c] cos(2 pi D / lambda),
 
@@ -31,7 +31,7 @@ linear in the three indices through constant rows baked with the fit (``index_sh
 slope ``dD/dr1`` (``d (1/s_i + 1/s_o)``, ``2 d`` for eq. 18).
 
 This module reads the baked table (numpy and the standard library); the numpy evaluation is
-:func:`.brdf.channel_cosine`.  The fit uses scipy and colour-science and lives with the
+``layered_brdf_reference.exact_model.channel_cosine``.  The fit uses scipy and colour-science and lives with the
 reference tools (``layered_brdf_reference/band_fitting.py``); it runs only when the table is
 rebuilt: ``make band-fit``.
 """
@@ -49,7 +49,7 @@ from .params import WAVELENGTHS_NM
 PATH = Path(__file__).with_name("data") / "band_fit.json"
 SLOTS = 4  # Gaussians per channel
 MIN_PATH_COS = 0.1  # floor of the refracted cosines in the path's slope dD/dr1 (first order only)
-_CAUCHY_SCALE_NM = 500.0  # as model/spectral.py: the Cauchy fit in x = (500 / lambda)^2
+_CAUCHY_SCALE_NM = 500.0  # as layered_brdf_reference/spectral.py: the Cauchy fit in x = (500 / lambda)^2
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,8 +1,8 @@
 """Baked spectral tables for the shaders (no colour-science at render time).
 
-``data/spectral_tables.json`` is written by ``python -m layered_brdf_addon.model.spectral``
-from colour-science's CIE 1931 CMFs and D65 (see model/spectral.py); a test checks that
-it is current.
+``data/spectral_tables.json`` is written by ``python -m layered_brdf_reference.spectral``
+from colour-science's CIE 1931 CMFs and D65 (see layered_brdf_reference/spectral.py); a test
+checks that it is current.
 """
 from __future__ import annotations
 

@@ -11,10 +11,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import program
-from .brdf import layered_brdf
 from .geometry import Z_AXIS, dot, safe_normalize
 from .ops_numpy import NoiseUnavailable, ShadingPoint
-from .params import LayeredParams, WAVELENGTHS_NM, iter_sockets
+from .params import LayeredParams, iter_sockets
 from .policy import plan_effects
 
 
@@ -149,23 +148,18 @@ def lower_normal(params: LayeredParams, n0: np.ndarray, p_object: np.ndarray, d=
     return np.asarray(np.broadcast_to(np.asarray(n1, dtype=float), np.shape(n0)))
 
 
-def exact_shading(params: LayeredParams, n0, n1, d, l, v, wavelengths=WAVELENGTHS_NM):
-    """Outgoing radiance per unit sun irradiance: ``<l, n0> (ks rho + kd base rho_d / pi)``."""
-    cos_l = np.maximum(dot(n0, l), 0.0)
-    i = np.broadcast_to(-np.asarray(l), np.shape(n0))
-    o = np.broadcast_to(np.asarray(v), np.shape(n0))
-    return cos_l[..., None] * layered_brdf(i, o, n0, n1, d, params, ng=n0, wavelengths=wavelengths)
-
-
 def render_spheres(params_list, camera: OrthoCamera, sun: Sun, centers=((0.0, 0.0, 0.0),), *,
-                   normals=None, thickness=None, lower_normals=None, shading=exact_shading,
-                   prefer_analytic=False, matrices=None):
+                   shading, normals=None, thickness=None, lower_normals=None, prefer_analytic=False, matrices=None):
     """Expected image (H, W, 3) of spheres, sphere ``k`` carrying ``params_list[k]``.
 
     ``normals``, ``thickness`` and ``lower_normals`` (per-pixel arrays, e.g. read from the
     render's passes) replace the analytic sphere normal, the thickness pattern and the lower
     normal where given; a noise pattern needs ``thickness`` (numpy does not evaluate Blender's
-    noise).  ``shading`` is :func:`exact_shading` or a closure form with the same signature.
+    noise).  ``shading(params, n0, n1, d, l, v)``: the outgoing radiance per unit sun irradiance,
+    (..., 3), at the pixels' normals, thicknesses and lower normals, ``l`` the direction to the
+    sun and ``v`` the view: the closure form (``layered_brdf_addon.fit.cycles_closures.
+    closure_shading``, what the shaders render) or the exact model
+    (``layered_brdf_reference.exact_spheres.exact_shading``).
     With ``prefer_analytic``, ``thickness`` is used only where numpy cannot compute ``d``.
     ``matrices``: per sphere, the 3x3 linear part of the object's transform (object to
     world) when it is not ``radius * identity`` — a rotated, non-uniformly scaled object

@@ -4,6 +4,9 @@ Conventions (SPEC): ``i`` points towards the surface, ``o`` away from it; channe
 axis last.  Equation numbers are the journal paper's.  :func:`layered_brdf` evaluates it
 in a material's accuracy mode (the paper's RGB, the analytic band integral, or N
 wavelengths), the colour model its shader approximates.
+
+The reference that the shaders' closure form is measured against (tests, benchmarks);
+not part of the extension, which ships the shading program (``layered_brdf_addon.model``).
 """
 from __future__ import annotations
 
@@ -11,13 +14,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .geometry import Z_AXIS
-from .params import WAVELENGTHS_NM, LayeredParams
-from . import ops_numpy
-from .policy import spectral_count
-from .program import band_cosine, film_beams, film_diffuse_rho, fresnel_reflectance, harmonics, interference_path
-from .spectral_band import per_channel
-from .spectral_tables import tables
+from layered_brdf_addon.model import ops_numpy
+from layered_brdf_addon.model.geometry import Z_AXIS
+from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
+from layered_brdf_addon.model.policy import spectral_count
+from layered_brdf_addon.model.program import (band_cosine, film_beams, film_diffuse_rho, fresnel_reflectance,
+                                              harmonics, interference_path)
+from layered_brdf_addon.model.spectral_band import per_channel
+from layered_brdf_addon.model.spectral_tables import tables
 
 TWO_PI = 2.0 * np.pi
 EXACT_HARMONICS = 4  # the exact model's thin-film optics: harmonics of the beams bouncing in the layer
@@ -25,9 +29,9 @@ EXACT_HARMONICS = 4  # the exact model's thin-film optics: harmonics of the beam
 
 def channel_cosine(opd_nm, r1_rgb=None, slope_nm=None) -> np.ndarray:
     """``C_c`` from the baked fit (numpy), the formula the shaders evaluate
-    (:func:`~.program.band_cosine`).  ``opd_nm``: the path difference ``D`` (...), or (..., 3)
-    per channel; with ``r1_rgb`` (the three indices) and ``slope_nm`` (``dD/dr1``) the path
-    follows the dispersed index.  What it approximates, the 1 nm integral, is
+    (:func:`~layered_brdf_addon.model.program.band_cosine`).  ``opd_nm``: the path difference
+    ``D`` (...), or (..., 3) per channel; with ``r1_rgb`` (the three indices) and ``slope_nm``
+    (``dD/dr1``) the path follows the dispersed index.  What it approximates, the 1 nm integral, is
     ``layered_brdf_reference.band_fitting.channel_cosine_numeric``."""
     D = per_channel(opd_nm)
     if r1_rgb is None:
@@ -111,8 +115,8 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
                    band=False, optics="paper", n2=None, k2=None, orders=1) -> SpecularTerms:
     """Evaluate eqs. 3-11 with the lobe normalisations of SPEC.
 
-    ``optics="physical"``: thin-film optics (:func:`.program.film_beams`) instead of the
-    paper's mirror: the exact Fresnel reflectance of the top boundary at the light's angle,
+    ``optics="physical"``: thin-film optics (:func:`~layered_brdf_addon.model.program.film_beams`)
+    instead of the paper's mirror: the exact Fresnel reflectance of the top boundary at the light's angle,
     the transmitted beams of the lower medium ``n2 + i k2`` (channel triples) crossing the top
     boundary at the light and the view, and ``orders`` harmonics of the interference with
     their reflection phases, each direction pair on its own.
@@ -315,7 +319,8 @@ def spectral_parts(i, o, n0, n1, d, p, n, ng=Z_AXIS):
     shape (..., 3) each: the model at each wavelength of the mode's sampling (the centres of
     ``n`` equal bins over 380-780 nm), its indices from the Cauchy fit through the three
     channels' values, summed with the bins' CIE 1931 / D65 weights: the baked tables of the
-    shader's spectral steps (:mod:`.spectral_tables`, :func:`.program.shade_spectral`).
+    shader's spectral steps (:mod:`~layered_brdf_addon.model.spectral_tables`,
+    :func:`~layered_brdf_addon.model.program.shade_spectral`).
 
     One wavelength at a time, so that only the running sums are (..., 3) arrays, whatever
     ``n``.  What the closures approximate, not what they compute: every wavelength refracts
@@ -344,8 +349,9 @@ def _at_wavelength(row, values, name):
 
 
 def film_diffuse(r1, r2, k2, r0, d, wavelengths=WAVELENGTHS_NM, band=False, orders=1):
-    """The physical mode's diffuse factor (:func:`.program.film_diffuse_rho`) of the channels'
-    indices ``r1``, ``r2`` and ``k2`` at ``wavelengths``, (C,) each; shape (..., C)."""
+    """The physical mode's diffuse factor
+    (:func:`~layered_brdf_addon.model.program.film_diffuse_rho`) of the channels' indices ``r1``,
+    ``r2`` and ``k2`` at ``wavelengths``, (C,) each; shape (..., C)."""
     d = np.asarray(d, dtype=float)
     shape = d.shape + np.shape(wavelengths)
 

@@ -21,20 +21,29 @@ Observer']`` (1 nm) and ``colour.SDS_ILLUMINANTS['D65']`` (5 nm, interpolated li
 to 1 nm by colour's own interpolator, as CIE 15 recommends for the D illuminants).
 :func:`cmf_wyman` is the analytic multi-lobe fit of Wyman, Sloan and Shirley (2013),
 usable where tables are not (OSL, shader nodes).
+
+The shaders read this module's tables baked into ``layered_brdf_addon/model/data/
+spectral_tables.json`` (:func:`shader_tables`; rewritten by ``python -m
+layered_brdf_reference.spectral``), so the extension needs no colour-science.
 """
 from __future__ import annotations
 
 import functools
+import json
 import math
+import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Callable, Literal
 
 import colour
 import numpy as np
 
-from .brdf import diffuse_rho, specular_brdf
-from .geometry import Z_AXIS
-from .params import WAVELENGTHS_NM, LayeredParams
+from layered_brdf_addon.model import spectral_tables
+from layered_brdf_addon.model.geometry import Z_AXIS
+from layered_brdf_addon.model.params import WAVELENGTHS_NM, LayeredParams
+
+from .exact_model import diffuse_rho, specular_brdf
 
 LAMBDA_MIN_NM = 380.0
 LAMBDA_MAX_NM = 780.0
@@ -361,7 +370,7 @@ def spectral_specular(i, o, n0, n1, r1_rgb, d, e0, e1, r0=1.0, sampling: Spectra
                       ng=Z_AXIS) -> np.ndarray:
     """Linear Rec.709 RGB of the specular ``rho(i, o)`` evaluated spectrally, shape (..., 3).
 
-    Same arguments as :func:`~.brdf.specular_brdf` with ``r1_rgb`` the three RGB indices;
+    Same arguments as :func:`~.exact_model.specular_brdf` with ``r1_rgb`` the three RGB indices;
     ``sampling`` is a :class:`SpectralSampling` or a number of wavelengths.
     """
     s = as_sampling(sampling)
@@ -454,7 +463,8 @@ def interference_cutoff_nm(r1, tolerance_de: float = 1.0, modulation: float = 1.
 
 
 # ----------------------------------------------------------------------------
-# Baked tables for the shaders (which have no colour-science): model/data/spectral_tables.json.
+# Baked tables for the shaders (which have no colour-science):
+# layered_brdf_addon/model/data/spectral_tables.json (read by model/spectral_tables.py).
 def shader_tables(n: int) -> dict:
     """Wavelengths, the Cauchy matrix ``K`` (``r1(lambda_j) = K[j] . r1_rgb``) and the
     spectrum-to-Rec.709 matrix ``M`` of ``spectral_sampling(n)``, as lists."""
@@ -468,11 +478,7 @@ def shader_tables(n: int) -> dict:
 
 def write_shader_tables(path=None) -> str:
     """(Re)write the baked tables; returns the path."""
-    import json
-    import os
-    from pathlib import Path
-
-    path = Path(path or Path(__file__).with_name("data") / "spectral_tables.json")
+    path = Path(path or spectral_tables.PATH)
     data = {str(n): shader_tables(n) for n in SAMPLE_COUNTS}
     tmp = path.with_suffix(".partial")
     tmp.write_text(json.dumps(data, indent=1))
