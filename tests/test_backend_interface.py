@@ -4,7 +4,9 @@ each implement every declared operation."""
 from __future__ import annotations
 
 import ast
+import importlib
 import inspect
+import pkgutil
 
 import numpy as np
 import pytest
@@ -13,17 +15,34 @@ from layered_brdf_addon.backends.node_group import GroupOps
 from layered_brdf_addon.backends.node_ops import NodeOps
 from layered_brdf_addon.backends.osl_ops import OslOps
 from layered_brdf_addon.backends.osl_shader import ShaderOps
-from layered_brdf_addon.model import ops_numpy, program
+from layered_brdf_addon.model import ops_numpy, program, shading
 from layered_brdf_addon.model.backend import ShadingOps, SurfaceOps, members
 from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.sphere import shading_point
 
 
+def program_modules() -> list:
+    """The shading program's modules: its top and every part of it."""
+    parts = [importlib.import_module(f"{shading.__name__}.{m.name}") for m in pkgutil.iter_modules(shading.__path__)]
+    return [program, *parts]
+
+
 def used_by_program() -> set[str]:
     """Every ``ops.NAME`` in the shading program."""
-    tree = ast.parse(inspect.getsource(program))
-    return {n.attr for n in ast.walk(tree)
-            if isinstance(n, ast.Attribute) and isinstance(n.value, ast.Name) and n.value.id == "ops"}
+    used = set()
+    for module in program_modules():
+        tree = ast.parse(inspect.getsource(module))
+        used |= {n.attr for n in ast.walk(tree)
+                 if isinstance(n, ast.Attribute) and isinstance(n.value, ast.Name) and n.value.id == "ops"}
+    return used
+
+
+def test_the_scan_covers_the_whole_program():
+    """Every step the program's top offers is defined in a module the scan reads."""
+    scanned = {m.__name__ for m in program_modules()}
+    steps = [getattr(program, name) for name in program.__all__]
+    defined_in = {step.__module__ for step in steps if inspect.isfunction(step) or inspect.isclass(step)}
+    assert defined_in <= scanned, defined_in - scanned
 
 
 def test_every_operation_the_program_uses_is_declared():

@@ -3,6 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import ops_numpy
+from .shading import surface_prelude
+
 Z_AXIS = np.array([0.0, 0.0, 1.0])
 X_AXIS = np.array([1.0, 0.0, 0.0])
 
@@ -54,18 +57,14 @@ def tilted_normal(n0: np.ndarray, tilt_deg, azimuth_deg=0.0, up=Z_AXIS, fallback
     ``n0`` rotated by ``tilt`` about the tilt axis ``normalize(cross(up, n0))`` (``fallback``
     where the cross product vanishes), the axis turned about ``n0`` by ``azimuth``.
     """
-    from . import ops_numpy, program
-
-    n1 = program.tilted_normal(ops_numpy, ops_numpy.vec(n0), np.asarray(tilt_deg, dtype=float),
-                               np.asarray(azimuth_deg, dtype=float), tuple(map(float, up)),
-                               tuple(map(float, fallback)))
+    n1 = surface_prelude.tilted_normal(ops_numpy, ops_numpy.vec(n0), np.asarray(tilt_deg, dtype=float),
+                                       np.asarray(azimuth_deg, dtype=float), tuple(map(float, up)),
+                                       tuple(map(float, fallback)))
     return np.asarray(n1)
 
 
 def correlated_normal(n0: np.ndarray, grad_d: np.ndarray, strength) -> np.ndarray:
     """Lower normal from the thickness gradient, ``normalize(n0 + s grad_t(d))``: the shading
     program's step.  ``grad_d`` is in nm per unit length; only its tangential part is used."""
-    from . import ops_numpy, program
-
-    return np.asarray(program.correlated_normal(ops_numpy, ops_numpy.vec(n0), ops_numpy.vec(grad_d),
-                                                np.asarray(strength, dtype=float)))
+    return np.asarray(surface_prelude.correlated_normal(ops_numpy, ops_numpy.vec(n0), ops_numpy.vec(grad_d),
+                                                        np.asarray(strength, dtype=float)))

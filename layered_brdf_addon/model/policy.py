@@ -14,7 +14,7 @@ from typing import Iterable
 
 from .params import LayeredParams, ParameterError
 from .plan import EffectPlan
-from .program import CLEAR_K
+from .shading.base_shader import CLEAR_K
 
 #: The shader backends: a node group of stock nodes, or an OSL shader (Cycles CPU / OptiX).
 BACKENDS = ("nodes", "osl")

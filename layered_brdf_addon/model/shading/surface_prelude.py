@@ -1,0 +1,106 @@
+"""The surface prelude: the layer's thickness at the shading point (Blender's noise or a
+height pattern) and the lower boundary's normal (parallel, tilted, or following the
+thickness).
+"""
+from __future__ import annotations
+
+import math
+
+from ..plan import EffectPlan
+from .step import shader_function
+
+DEG = math.pi / 180.0
+GRADIENT_STEP = 1.0e-3  # forward-difference step (world units) of the thickness gradient
+D_LIMIT = 1.0e6  # largest thickness (nm): the range of d_min and d_max
+
+
+@shader_function
+def rotate_about(ops, a, axis, angle):
+    """Rotate ``a`` about the unit ``axis`` by ``angle`` radians (Rodrigues)."""
+    c = ops.cos(angle)
+    s = ops.sin(angle)
+    return a * c + ops.cross(axis, a) * s + axis * (ops.dot(axis, a) * (1.0 - c))
+
+
+@shader_function
+def tangent_axis(ops, n0, up, fallback):
+    """Tilt axis ``normalize(cross(up, n0))``; at the poles, where n0 is along ``up`` and the
+    cross product vanishes (length below 1e-4), ``fallback``."""
+    c = ops.cross(up, n0)
+    return ops.select_vec(ops.lt(ops.length(c), 1e-4), fallback, ops.normalize(c, fallback))
+
+
+@shader_function
+def tilted_normal(ops, n0, tilt_deg, azimuth_deg, up, fallback):
+    """Lower normal of a constant tilt: ``n0`` rotated by ``tilt_deg`` about the tilt axis,
+    the axis first turned about ``n0`` by ``azimuth_deg``.  Any tilt up to 180 degrees is
+    valid: at 90 or 180 degrees no path crosses the layer (eq. 11)."""
+    t = tangent_axis(ops, n0, up, fallback)
+    t = rotate_about(ops, t, n0, azimuth_deg * DEG)
+    return ops.normalize(rotate_about(ops, n0, t, tilt_deg * DEG), n0)
+
+
+@shader_function
+def correlated_normal(ops, n0, grad_d, strength):
+    """Lower normal from the thickness gradient: ``normalize(n0 + s grad_t(d))``, the
+    tangential part of the gradient only; a degenerate sum falls back to ``n0``."""
+    g = grad_d - n0 * ops.dot(grad_d, n0)
+    return ops.normalize(n0 + g * strength, n0)
+
+
+@shader_function
+def thickness_factor(ops, p, scale, detail, roughness, phase, *, pattern):
+    """The thickness pattern's factor at the object-space position ``p``: Blender's Noise
+    Texture (4D fBm, W = phase, lacunarity 2, normalised), or ``clamp(0.5 - 0.5 z, 0, 1)``,
+    a film that thickens downwards like a draining soap film."""
+    if pattern == "noise":
+        return ops.noise_fbm(p, phase, scale, detail, roughness)
+    return ops.clamp(0.5 - 0.5 * ops.dot(p, (0.0, 0.0, 1.0)), 0.0, 1.0)
+
+
+@shader_function
+def thickness_at(ops, p, d_min, d_max, scale, detail, roughness, phase, *, pattern):
+    """``d = d_min + (d_max - d_min) clamp(n, 0, 1)`` in nm, within [0, D_LIMIT].  With
+    ``d_min > d_max`` (sockets fed by textures) the same formula holds: the pattern runs
+    from ``d_min`` where the factor is 0 down to ``d_max`` where it is 1."""
+    n = thickness_factor(ops, p, scale, detail, roughness, phase, pattern=pattern)
+    return ops.clamp(d_min + (d_max - d_min) * ops.clamp(n, 0.0, 1.0), 0.0, D_LIMIT)
+
+
+@shader_function
+def thickness_gradient(ops, p, d, d_min, d_max, scale, detail, roughness, phase, *, pattern):
+    """World-space gradient of the thickness ``d`` at ``p`` (nm per world unit), by forward
+    differences along the world axes, each step taken into object space: component k is
+    ``(d(p + M^-1 h e_k) - d(p)) / h``, which is ``(M^-T grad_obj d)_k``, the inverse
+    transpose that a gradient (a covector) needs under rotation and non-uniform scale."""
+    h = GRADIENT_STEP
+    args = (d_min, d_max, scale, detail, roughness, phase)
+    dx = thickness_at(ops, p + ops.world_to_object((h, 0.0, 0.0)), *args, pattern=pattern) - d
+    dy = thickness_at(ops, p + ops.world_to_object((0.0, h, 0.0)), *args, pattern=pattern) - d
+    dz = thickness_at(ops, p + ops.world_to_object((0.0, 0.0, h)), *args, pattern=pattern) - d
+    return ops.combine(dx, dy, dz) * (1.0 / h)
+
+
+def pattern_inputs(P):
+    """The inputs of :func:`thickness_at` after the position."""
+    return (P["d_min"], P["d_max"], P["noise_scale"], P["noise_detail"], P["noise_roughness"], P["noise_phase"])
+
+
+def layer_thickness(ops, P, p_obj, plan: EffectPlan):
+    """Thickness ``d`` (nm) at the object-space position ``p_obj``."""
+    if plan.thickness == "constant":
+        return P["d_min"]
+    return thickness_at(ops, p_obj, *pattern_inputs(P), pattern=plan.thickness)
+
+
+def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan):
+    """Lower boundary normal ``n1`` (world space) at a point of upper normal ``n0``."""
+    if plan.normals == "tilted":
+        # The object's axes in world space: the tilt sticks to the object.
+        up = ops.normalize(ops.object_to_world((0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
+        x_axis = ops.normalize(ops.object_to_world((1.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
+        return tilted_normal(ops, n0, P["tilt"], P["tilt_azimuth"], up, x_axis)
+    if plan.normals == "correlated" and plan.thickness != "constant":
+        grad = thickness_gradient(ops, p_obj, d, *pattern_inputs(P), pattern=plan.thickness)
+        return correlated_normal(ops, n0, grad, P["bump_strength"])
+    return n0
