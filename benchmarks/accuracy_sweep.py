@@ -28,7 +28,7 @@ import colour  # noqa: E402
 import numpy as np  # noqa: E402
 
 from accuracy_table import _fmt  # noqa: E402  (benchmarks/ is on sys.path when the script runs)
-from layered_brdf_reference import sweep as S  # noqa: E402
+from layered_brdf_reference import sweep  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "accuracy_sweep.json"
@@ -40,7 +40,7 @@ def _pct(x: float) -> str:
     return f"{100.0 * x:.1f}%"
 
 
-def _summary_row(label: str, s: S.Summary) -> str:
+def _summary_row(label: str, s: sweep.Summary) -> str:
     return (f"| {label} | {s.configurations} | {_pct(s.l1_p50)} | {_pct(s.l1_p95)} | {_pct(s.l1_max)} | "
             f"{s.over_20} | {s.holes} ({s.configurations_with_holes}) | {s.ghosts} | {_pct(s.l1_sphere_p95)} | "
             f"{_fmt(s.energy_p5)} / {_fmt(s.energy_p50)} / "
@@ -84,14 +84,14 @@ def markdown(res: dict) -> str:
              f"{', '.join(st['spectral_modes'])}; {st['seconds']:.0f} s on one core "
              f"(numpy {st['numpy']}, Python {st['python']}).", "",
              "### Summary", "", *SUMMARY_HEAD]
-    rgb = S.Summary(**res["summary"]["rgb"])
+    rgb = sweep.Summary(**res["summary"]["rgb"])
     lines.append(_summary_row("RGB design (all)", rgb))
     for key, title in (("normal_mode", "normal mode"), ("elevation", "sun elevation (°)"),
                        ("exponent", "exponents"), ("dispersion", "indices")):
         for k, s in res["summary"][key].items():
-            lines.append(_summary_row(f"RGB, {title}: {k}", S.Summary(**s)))
+            lines.append(_summary_row(f"RGB, {title}: {k}", sweep.Summary(**s)))
     for k, s in res["summary"]["spectral"].items():
-        lines.append(_summary_row(f"spectral design, {k}", S.Summary(**s)))
+        lines.append(_summary_row(f"spectral design, {k}", sweep.Summary(**s)))
     lines += ["", "### Worst ten configurations (highest L1, both designs)", "",
               "| L1 | energy (R/G/B) | mean ΔE00 lit | holes / highlight px | configuration |",
               "| ---: | ---: | ---: | ---: | --- |"]
@@ -99,8 +99,8 @@ def markdown(res: dict) -> str:
         m = r["metrics"]
         en = "/".join(f"{x:.2f}" for x in m["energy_rgb"])
         lines.append(f"| {_pct(m['l1'])} | {m['energy']:.2f} ({en}) | {_fmt(m['de_lit'])} | "
-                     f"{m['holes']} / {m['highlight_pixels']} | {S.describe(r['config'])} |")
-    lines += ["", f"### Presets under a standard sun ({S.STANDARD_SUN_DEG:g}° off the view, above it)", "",
+                     f"{m['holes']} / {m['highlight_pixels']} | {sweep.describe(r['config'])} |")
+    lines += ["", f"### Presets under a standard sun ({sweep.STANDARD_SUN_DEG:g}° off the view, above it)", "",
               "A noise thickness is replaced by the height pattern over the same range (numpy does not "
               "evaluate Blender's noise).", "",
               "| preset | ks / kd | L1 over the highlight | energy | mean ΔE00 lit | holes | specular only: L1 | "
@@ -134,27 +134,28 @@ def main(argv=None) -> int:
         if (k + 1) % 200 == 0:
             print(f"  {k + 1} configurations, {time.perf_counter() - t0:.0f} s", file=sys.stderr)
 
-    rgb = S.run(S.design(args.configurations, args.seed), args.resolution, progress=progress)
-    spectral = S.run(S.spectral_design(args.spectral, args.spectral_seed), args.resolution, progress=progress)
-    presets = S.preset_rows(args.resolution)
+    rgb = sweep.run(sweep.design(args.configurations, args.seed), args.resolution, progress=progress)
+    spectral = sweep.run(sweep.spectral_design(args.spectral, args.spectral_seed), args.resolution, progress=progress)
+    presets = sweep.preset_rows(args.resolution)
     seconds = time.perf_counter() - t0
 
     def by(key):
-        return {k: asdict(v) for k, v in S.groups(rgb, key).items()}
+        return {k: asdict(v) for k, v in sweep.groups(rgb, key).items()}
 
     summary = dict(
-        rgb={k: v for k, v in asdict(S.summarise(rgb)).items() if k != "worst"},
-        normal_mode=by(lambda c: c["normal_mode"]), elevation=by(S.elevation_band), exponent=by(S.exponent_band),
+        rgb={k: v for k, v in asdict(sweep.summarise(rgb)).items() if k != "worst"},
+        normal_mode=by(lambda c: c["normal_mode"]), elevation=by(sweep.elevation_band),
+        exponent=by(sweep.exponent_band),
         dispersion=by(lambda c: "dispersive" if c["dispersive"] else "equal"),
-        spectral={k: asdict(v) for k, v in S.groups(spectral, lambda c: c["accuracy"]).items()})
+        spectral={k: asdict(v) for k, v in sweep.groups(spectral, lambda c: c["accuracy"]).items()})
     res = dict(
         setup=dict(resolution=args.resolution, rgb_configurations=len(rgb), seed=args.seed,
                    spectral_base=args.spectral, spectral_seed=args.spectral_seed,
-                   spectral_modes=list(S.ACCURACY_MODES), seconds=seconds,
-                   highlight_fraction=S.HIGHLIGHT_FRACTION, hole_fraction=S.HOLE_FRACTION,
-                   standard_sun_deg=S.STANDARD_SUN_DEG, numpy=np.__version__, colour=colour.__version__,
+                   spectral_modes=list(sweep.ACCURACY_MODES), seconds=seconds,
+                   highlight_fraction=sweep.HIGHLIGHT_FRACTION, hole_fraction=sweep.HOLE_FRACTION,
+                   standard_sun_deg=sweep.STANDARD_SUN_DEG, numpy=np.__version__, colour=colour.__version__,
                    python=platform.python_version()),
-        summary=summary, worst=S.summarise(rgb + spectral).worst, presets=presets, rgb=rgb, spectral=spectral)
+        summary=summary, worst=sweep.summarise(rgb + spectral).worst, presets=presets, rgb=rgb, spectral=spectral)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(dumps(res))
     text = markdown(res)

@@ -55,32 +55,32 @@ def variants():
             ("control: constant 500 nm (the silhouette's noise)", flat, plan_effects(flat))]
 
 
-def render(S, samples: int, seed: int) -> np.ndarray:
+def render(scene, samples: int, seed: int) -> np.ndarray:
     import bpy
 
     c = bpy.context.scene.cycles
     c.samples, c.seed = samples, seed
     with tempfile.TemporaryDirectory(prefix="layered_brdf_alias_") as tmp:
         path = Path(tmp) / "r.exr"
-        S.render_to_exr(path)
-        return S.passes_from_exr(path).beauty[..., :3].astype(float)
+        scene.render_to_exr(path)
+        return scene.passes_from_exr(path).beauty[..., :3].astype(float)
 
 
 def measure(label, params, plan, threads: int) -> dict:
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender import scene
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.model.sphere import Sun
 
-    S.reset_blender()
+    scene.reset_blender()
     sun = Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=3.0)
-    spheres = S.build_scene(S.SceneSpec(camera=S.camera_for(1, HEIGHT), sun=sun, osl=True, threads=threads))
+    spheres = scene.build_scene(scene.SceneSpec(camera=scene.camera_for(1, HEIGHT), sun=sun, osl=True, threads=threads))
     import bpy
 
     bpy.context.scene.cycles.filter_width = FILTER_WIDTH
     apply_layered_material(spheres[0], params, "osl", plan=plan, name="Aliasing")
     t0 = time.process_time()
-    reference = render(S, REFERENCE_SPP, 0)
-    low = np.stack([render(S, LOW_SPP, s) for s in SEEDS])
+    reference = render(scene, REFERENCE_SPP, 0)
+    low = np.stack([render(scene, LOW_SPP, s) for s in SEEDS])
     return dict(label=label, plan=plan.key, reference=reference, low=low, cpu_seconds=time.process_time() - t0)
 
 

@@ -26,28 +26,28 @@ RESULTS = Path(__file__).resolve().parent / "results"
 
 
 def _scene(backend_osl: bool, size: int):
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender import scene
     from layered_brdf_addon.model.sphere import Sun
 
-    S.reset_blender()
-    cam = S.camera_for(1, size)
+    scene.reset_blender()
+    cam = scene.camera_for(1, size)
     sun = Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=3.0)
-    spheres = S.build_scene(S.SceneSpec(camera=cam, sun=sun, osl=backend_osl, threads=1))
-    return S, spheres[0]
+    spheres = scene.build_scene(scene.SceneSpec(camera=cam, sun=sun, osl=backend_osl, threads=1))
+    return scene, spheres[0]
 
 
-def _time_render(S, samples: int) -> float:
+def _time_render(scene, samples: int) -> float:
     import bpy
 
     bpy.context.scene.cycles.samples = samples
     with __import__("tempfile").TemporaryDirectory() as tmp:
-        return S.render_to_exr(Path(tmp) / "r.exr")
+        return scene.render_to_exr(Path(tmp) / "r.exr")
 
 
-def per_sample(S, s1: int, s2: int, repeats: int) -> float:
-    _time_render(S, 1)  # warm: kernels, shader compilation
-    best1 = min(_time_render(S, s1) for _ in range(repeats))
-    best2 = min(_time_render(S, s2) for _ in range(repeats))
+def per_sample(scene, s1: int, s2: int, repeats: int) -> float:
+    _time_render(scene, 1)  # warm: kernels, shader compilation
+    best1 = min(_time_render(scene, s1) for _ in range(repeats))
+    best2 = min(_time_render(scene, s2) for _ in range(repeats))
     return max(cost_per_sample(best1, best2, s1, s2), 1e-9)
 
 
@@ -67,13 +67,13 @@ def run(presets, size, s1, s2, repeats, spectral_preset="fig6_medium",
     from layered_brdf_addon.model.policy import plan_effects
 
     rows = []
-    S, obj = _scene(False, size)
+    scene, obj = _scene(False, size)
     principled_thin_film(obj)
-    ref = per_sample(S, s1, s2, repeats)
+    ref = per_sample(scene, s1, s2, repeats)
     rows.append(dict(config="Principled BSDF + Thin Film", backend="nodes", per_sample=ref))
-    S, obj = _scene(False, size)
+    scene, obj = _scene(False, size)
     plain_diffuse(obj)
-    rows.append(dict(config="Diffuse BSDF", backend="nodes", per_sample=per_sample(S, s1, s2, repeats)))
+    rows.append(dict(config="Diffuse BSDF", backend="nodes", per_sample=per_sample(scene, s1, s2, repeats)))
     for name in presets:
         p = preset(name)
         planned = plan_effects(p)
@@ -81,9 +81,9 @@ def run(presets, size, s1, s2, repeats, spectral_preset="fig6_medium",
             q = p.replace(lobe=lobe)
             for which, plan in (("planned", planned), ("full", EffectPlan.full(lobe=lobe))):
                 plan = EffectPlan(**{**plan.to_dict(), "lobe": lobe})
-                S, obj = _scene(backend == "osl", size)
+                scene, obj = _scene(backend == "osl", size)
                 apply_layered_material(obj, q, backend, plan=plan)
-                t = per_sample(S, s1, s2, repeats)
+                t = per_sample(scene, s1, s2, repeats)
                 rows.append(dict(config=f"{name} {which} [{plan.key}]", preset=name, which=which, backend=backend,
                                  lobe=lobe, plan=plan.key, per_sample=t))
     # Accuracy modes: RGB and N wavelengths, both backends, the planned shader of one preset.
@@ -91,9 +91,9 @@ def run(presets, size, s1, s2, repeats, spectral_preset="fig6_medium",
     for mode in spectral_modes:
         for backend in ("nodes", "osl"):
             p = preset(spectral_preset).replace(accuracy=mode)
-            S, obj = _scene(backend == "osl", size)
+            scene, obj = _scene(backend == "osl", size)
             apply_layered_material(obj, p, backend)
-            t = per_sample(S, s1, s2, repeats)
+            t = per_sample(scene, s1, s2, repeats)
             if mode == "rgb" and backend == "nodes":
                 rgb_nodes = t
             rows.append(dict(config=f"{spectral_preset} {mode}", preset=spectral_preset, which="mode", mode=mode,

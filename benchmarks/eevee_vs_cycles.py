@@ -34,7 +34,7 @@ PAIRS_PER_ROW = 4
 
 
 def main(argv=None) -> int:
-    import eevee_lookdev as E
+    import eevee_lookdev
 
     from layered_brdf_addon.cli.gallery import compose_sheet, layout_for
     from layered_brdf_addon.cli.codecs import save_png
@@ -54,14 +54,15 @@ def main(argv=None) -> int:
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
-        r = E.run(Path(tmp) / "r.npz", args.size, args.cycles_samples, args.eevee_samples, args.presets, 3600)
+        r = eevee_lookdev.run(Path(tmp) / "r.npz", args.size, args.cycles_samples, args.eevee_samples, args.presets,
+                              3600)
         # Cycles' own noise: the same renders with another seed
-        noise = E.run(Path(tmp) / "n.npz", args.size, args.cycles_samples, 0, args.presets, 3600, seed=1)
+        noise = eevee_lookdev.run(Path(tmp) / "n.npz", args.size, args.cycles_samples, 0, args.presets, 3600, seed=1)
     rows, tiles, labels = [], [], []
     for name in args.presets:
         c, e, m = r[f"{name}/cycles"], r[f"{name}/eevee"], r[f"{name}/mask"]
-        de = E.delta_e2000(c, e, m)
-        dn = E.delta_e2000(c, noise[f"{name}/cycles"], m)
+        de = eevee_lookdev.delta_e2000(c, e, m)
+        dn = eevee_lookdev.delta_e2000(c, noise[f"{name}/cycles"], m)
         rows.append({"name": name, "mean": float(de.mean()), "p95": float(np.percentile(de, 95)),
                      "cycles_noise_mean": float(dn.mean()), "cycles_noise_p95": float(np.percentile(dn, 95)),
                      "pixels": int(m.sum()), "cycles_seconds": float(r[f"{name}/cycles_seconds"]),

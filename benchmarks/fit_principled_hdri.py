@@ -21,10 +21,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from layered_brdf_addon.blender import lookdev  # noqa: E402
-from layered_brdf_addon.blender import principled_target as P  # noqa: E402
-from layered_brdf_addon.blender import scene as S  # noqa: E402
+from layered_brdf_addon.blender import principled_target  # noqa: E402
 from layered_brdf_addon.blender.fit_operator import run_fit  # noqa: E402
 from layered_brdf_addon.blender.material import apply_layered_material  # noqa: E402
+from layered_brdf_addon.blender.scene import render_to_file, reset_blender  # noqa: E402
 from layered_brdf_addon.fit import colour_space  # noqa: E402
 from layered_brdf_addon.fit.environment import DEFAULT_HDRIS  # noqa: E402
 from layered_brdf_addon.model.presets import preset  # noqa: E402
@@ -49,8 +49,8 @@ def render_ball(material, hdri: str, size: int, samples: int, folder: Path, name
         s = scene.render.image_settings
         s.media_type, s.file_format, s.color_mode, s.color_depth = "IMAGE", "OPEN_EXR", "RGB", "32"
         path = folder / f"{name}.exr"
-        S.render_to_file(path, scene)
-        return P.read_float_image(path)
+        render_to_file(path, scene)
+        return principled_target.read_float_image(path)
     finally:
         lookdev.remove_scene(scene)
 
@@ -75,7 +75,7 @@ def main(argv=None) -> None:
                                     "under each HDRI")
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args(argv)
-    S.reset_blender()
+    reset_blender()
     rows, sheet_rows = [], []
     with tempfile.TemporaryDirectory(prefix="layered_brdf_fit_hdri_") as tmp:
         folder = Path(tmp)
@@ -83,9 +83,10 @@ def main(argv=None) -> None:
         for name in args.only:
             make, start = CONVERSIONS[name]
             material = make()
-            views = P.principled_views_of(material, hdris=[lookdev.hdri_path(h) for h in args.fit_hdris])
+            hdris = [lookdev.hdri_path(h) for h in args.fit_hdris]
+            views = principled_target.principled_views_of(material, hdris=hdris)
             t0, cpu0 = time.perf_counter(), time.process_time()
-            result = run_fit(views, P.start_for(preset(start), material))
+            result = run_fit(views, principled_target.start_for(preset(start), material))
             seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
             import bpy
 

@@ -64,9 +64,9 @@ def render(output: Path, size: int, samples: int, names, hdri_name, progress: bo
     import bpy
     from tqdm import tqdm
 
-    from layered_brdf_addon.blender import lookdev as L
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender import lookdev
     from layered_brdf_addon.blender.material import apply_layered_material
+    from layered_brdf_addon.blender.scene import reset_blender, view_settings_record
     from layered_brdf_addon.cli.codecs import save_png
     from layered_brdf_addon.cli.gallery import layout_for
     from layered_brdf_addon.cli.lookdev import encode_sheet, render_tiles
@@ -75,13 +75,13 @@ def render(output: Path, size: int, samples: int, names, hdri_name, progress: bo
     from layered_brdf_addon.model.presets import preset, preset_label
 
     t0 = time.perf_counter()
-    hdri = L.hdri_path(hdri_name)
-    S.reset_blender()
-    scene, ball = L.build_lookdev_scene(size=size, samples=samples, hdri=hdri.name)
+    hdri = lookdev.hdri_path(hdri_name)
+    reset_blender()
+    scene, ball = lookdev.build_lookdev_scene(size=size, samples=samples, hdri=hdri.name)
     tiles, equivalents = [], {}
     for name in names:
         p = preset(name)
-        kw = L.thin_film_equivalent(name, p)
+        kw = lookdev.thin_film_equivalent(name, p)
         equivalents[name] = kw
 
         def layered(name=name, p=p):
@@ -89,7 +89,7 @@ def render(output: Path, size: int, samples: int, names, hdri_name, progress: bo
             apply_layered_material(ball, p, "nodes", name=name)
 
         def principled(name=name, kw=kw):
-            ball.material_slots[0].material = L.principled_thin_film(f"{name} Principled + Thin Film", **kw)
+            ball.material_slots[0].material = lookdev.principled_thin_film(f"{name} Principled + Thin Film", **kw)
 
         tiles += [(name, layered), (f"{name} (Principled)", principled)]
     labels_base = [[preset_label(n), "layered (node group)"] if k % 2 == 0 else
@@ -107,7 +107,7 @@ def render(output: Path, size: int, samples: int, names, hdri_name, progress: bo
     labels = [lab + [f"{sec:.1f} s render"] for lab, sec in zip(labels_base, seconds)]
     pixels = encode_sheet(scene, sheet, layout, labels, title)
     data = {"title": title, "hdri": hdri.name, "size": size, "samples": samples,
-            "view": S.view_settings_record(scene), "bpy_version": bpy.app.version_string,
+            "view": view_settings_record(scene), "bpy_version": bpy.app.version_string,
             "presets": [{"name": n, "params": preset(n).to_dict(), "principled_thin_film": equivalents[n],
                          "render_seconds": {"layered": seconds[2 * k], "principled": seconds[2 * k + 1]}}
                         for k, n in enumerate(names)],

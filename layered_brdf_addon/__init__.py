@@ -8,10 +8,10 @@ __version__ = "0.1.0"
 
 
 def register():
-    from .blender import registration
+    from .blender import registration  # needs bpy: loaded only when Blender registers the add-on
     registration.register()
 
 
 def unregister():
-    from .blender import registration
+    from .blender import registration  # needs bpy: loaded only when Blender registers the add-on
     registration.unregister()

@@ -17,7 +17,7 @@ from layered_brdf_addon.fit.mirror import UNIT_LOBE_EXPONENT, mirror_reflectance
 from layered_brdf_addon.model.media import layer_index_values, spectrum
 from layered_brdf_addon.model.params import LayeredParams
 
-from . import thin_film as tf
+from . import thin_film
 
 OUTSIDE_INDEX = 1.0  # air above the film
 ANGLES_DEG = (0.0, 30.0, 60.0)
@@ -71,7 +71,7 @@ def model_film_rgb(film: str, below: str, thickness_nm, theta_deg: float, optics
 
 def rgb_to_lab(rgb) -> np.ndarray:
     """Lab (D65) of linear Rec.709 RGB (last axis)."""
-    return tf.xyz_to_lab(tf.linear_rec709_to_xyz(rgb))
+    return thin_film.xyz_to_lab(thin_film.linear_rec709_to_xyz(rgb))
 
 
 def complex_index(name: str, wavelengths_nm) -> np.ndarray:
@@ -81,11 +81,11 @@ def complex_index(name: str, wavelengths_nm) -> np.ndarray:
 
 
 def reference_film_lab(film: str, below: str, thickness_nm, theta_deg: float,
-                       wavelengths_nm=tf.WAVELENGTHS_NM) -> np.ndarray:
+                       wavelengths_nm=thin_film.WAVELENGTHS_NM) -> np.ndarray:
     """Lab (D65) of tmm's reflectance spectrum of air | film | below, one row per thickness."""
     lams = np.asarray(wavelengths_nm, dtype=float)
-    return tf.film_lab(OUTSIDE_INDEX, complex_index(film, lams), complex_index(below, lams),
-                       np.atleast_1d(thickness_nm), theta_deg, lams)
+    return thin_film.film_lab(OUTSIDE_INDEX, complex_index(film, lams), complex_index(below, lams),
+                              np.atleast_1d(thickness_nm), theta_deg, lams)
 
 
 def film_errors(film: str, below: str, thickness_nm, theta_deg: float, optics: str = "physical",
@@ -95,4 +95,4 @@ def film_errors(film: str, below: str, thickness_nm, theta_deg: float, optics: s
     if reference_lab is None:
         reference_lab = reference_film_lab(film, below, thickness_nm, theta_deg)
     model = rgb_to_lab(model_film_rgb(film, below, thickness_nm, theta_deg, optics, accuracy))
-    return tf.delta_e_2000(model, reference_lab)
+    return thin_film.delta_e_2000(model, reference_lab)

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.cycles_closures import closure_shading
 from layered_brdf_addon.fit.targets import SphereTarget, SphereView
 from layered_brdf_addon.model.presets import preset
 from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
 
-from . import thin_film as tf
+from . import thin_film
 from .film_colours import complex_index
 
 CAMERA = OrthoCamera(width=96, height=96)
@@ -47,8 +48,6 @@ def views_of(params, suns=SUNS[:1]) -> list[SphereView]:
 def image_delta_e(target, params) -> float:
     """Mean CIEDE2000 over every pixel of the sphere between a sphere target's images and the
     closure form of ``params`` (the fit samples the pixels; this reads them all)."""
-    from layered_brdf_addon.fit import colour_space
-
     out = []
     for k, view in enumerate(target.views):
         m = target.mask(k)
@@ -68,6 +67,7 @@ def tmm_rows(film: str, below: str, thickness: float, angles=(0.0, 30.0, 60.0)) 
     lams = np.arange(380.0, 781.0, 10.0)
     rows = []
     for angle in angles:
-        r = tf.film_reflectance(1.0, complex_index(film, lams), complex_index(below, lams), thickness, angle, lams)
+        r = thin_film.film_reflectance(1.0, complex_index(film, lams), complex_index(below, lams), thickness, angle,
+                                       lams)
         rows += [(angle, lam, float(x)) for lam, x in zip(lams, r)]
     return rows

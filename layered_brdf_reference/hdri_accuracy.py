@@ -34,7 +34,7 @@ def hdri_image(name: str) -> np.ndarray:
     Blender stores images, box-filtered down to :data:`ENV_WIDTH`."""
     import OpenEXR
 
-    from layered_brdf_addon.blender.lookdev import hdri_path
+    from layered_brdf_addon.blender.lookdev import hdri_path  # needs bpy, which the rest of this module does not
 
     with OpenEXR.File(str(hdri_path(name)), separate_channels=True) as f:
         ch = f.parts[0].channels

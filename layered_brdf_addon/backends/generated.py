@@ -18,6 +18,7 @@ from pathlib import Path
 from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
 from ..model.policy import plan_effects
+from .osl_shader import shader_source
 
 ROOT = Path(__file__).resolve().parents[2]
 OSL_FILE = ROOT / "osl" / "layered_brdf.osl"
@@ -33,8 +34,6 @@ def node_group_file(plan: EffectPlan) -> Path:
 
 
 def osl_text(plan: EffectPlan | None = None) -> str:
-    from .osl_shader import shader_source
-
     return shader_source(plan or default_plan())
 
 
@@ -72,7 +71,7 @@ def describe_tree(tree) -> dict:
 
 def node_group_description(plan: EffectPlan | None = None) -> str:
     """JSON of the node group for ``plan`` and of the sub-groups it uses (needs bpy)."""
-    from .node_group import ensure_group
+    from .node_group import ensure_group  # needs bpy, which writing the OSL shader does not
 
     plan = plan or default_plan()
     group = ensure_group(plan)

@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import functools
 
-from ..model import params as P_
 from ..model import program
+from ..model.params import (BASE_COLOR_DESCRIPTION, LayeredParams, group_socket_name, iter_group_sockets,
+                            iter_sockets, socket_name)
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
-from .osl_ops import OslOps, Val, _run_capturing_locals, literal
+from .osl_ops import FunctionBody, OslOps, Val, _run_capturing_locals, literal
 
 OSL_VERSION = 3  # 3: the base colour one colour parameter (BaseColor), no tint
 SHADER_NAME = "layered_brdf"
@@ -155,10 +156,10 @@ class ShaderOps(OslOps):
     def input(self, name):
         if name == "Normal":
             return self.atom(name, "vector")
-        spec = P_.LayeredParams.spec(name)
+        spec = LayeredParams.spec(name)
         if spec.component is not None:  # a channel of a colour parameter
-            return self.atom(f"{SOCKET_NAMES[P_.group_socket_name(spec)]}[{spec.component}]", "float")
-        return self.atom(P_.socket_name(spec), "float")
+            return self.atom(f"{SOCKET_NAMES[group_socket_name(spec)]}[{spec.component}]", "float")
+        return self.atom(socket_name(spec), "float")
 
     def shading_normal(self):
         return self.atom("N", "vector")
@@ -181,11 +182,11 @@ class ShaderOps(OslOps):
 
 def _parameter_lines() -> list[str]:
     lines = ["normal Normal = N"]
-    for sock in P_.iter_group_sockets():
+    for sock in iter_group_sockets():
         if sock.is_color:
             default = ", ".join(literal(spec.default) for spec in sock.specs)
             lines.append(f"color {SOCKET_NAMES[sock.name]} = color({default})\n"
-                         f'      [[ string label = "{sock.name}", string help = "{P_.BASE_COLOR_DESCRIPTION}" ]]')
+                         f'      [[ string label = "{sock.name}", string help = "{BASE_COLOR_DESCRIPTION}" ]]')
             continue
         (spec,) = sock.specs
         unit = f" ({spec.unit})" if spec.unit else ""
@@ -193,7 +194,7 @@ def _parameter_lines() -> list[str]:
                 f"float min = {literal(spec.min)}", f"float max = {literal(spec.max)}"]
         if spec.soft_min is not None:
             meta += [f"float slidermin = {literal(spec.soft_min)}", f"float slidermax = {literal(spec.soft_max)}"]
-        lines.append(f"float {P_.socket_name(spec)} = {literal(spec.default)}\n      [[ {', '.join(meta)} ]]")
+        lines.append(f"float {socket_name(spec)} = {literal(spec.default)}\n      [[ {', '.join(meta)} ]]")
     lines += [
         "closure color Base = 0",
         "output closure color BSDF = 0",
@@ -209,8 +210,6 @@ def shader_source(plan: EffectPlan) -> str:
     """The OSL source of the shader for ``plan``."""
     check_backend("osl", plan.lobe)
     ops = ShaderOps()
-    from .osl_ops import FunctionBody
-
     body = FunctionBody(SHADER_NAME, code=program.layered_surface.__code__)
     ops._bodies.append(body)
     res, local_names = _run_capturing_locals(program.layered_surface, ops, {}, {"plan": plan})
@@ -231,7 +230,7 @@ def shader_source(plan: EffectPlan) -> str:
     ops.raw(f"Thickness = {ops.use(x['thickness'])};")
     ops.raw(f"LowerNormal = {ops.use(x['lower_normal'])};")
     ops.raw(f"UpperNormal = {ops.use(x['upper_normal'])};")
-    reserved = {P_.socket_name(s) for s in P_.iter_sockets()} | set(SOCKET_NAMES.values())
+    reserved = {socket_name(s) for s in iter_sockets()} | set(SOCKET_NAMES.values())
     main = ops.resolve(body, local_names, reserved=reserved)
     params = ",\n                    ".join(_parameter_lines())
     parts = [HEADER.format(key=plan.key, plan="; ".join(plan.describe())), LIBRARY, GLOSSY[plan.lobe],

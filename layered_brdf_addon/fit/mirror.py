@@ -12,8 +12,7 @@ import math
 
 import numpy as np
 
-from ..model import ops_numpy as O
-from ..model import program
+from ..model import ops_numpy, program
 from ..model.params import WAVELENGTHS_NM, LayeredParams
 from ..model.policy import plan_effects
 
@@ -34,16 +33,17 @@ def mirror_reflectance(params: LayeredParams, theta_deg: float, thickness_nm=Non
     d = np.atleast_1d(np.asarray(p.d_min if thickness_nm is None else thickness_nm, dtype=float))
     cos_v = np.full(d.shape, math.cos(math.radians(theta_deg)))
     one = np.ones(d.shape)
-    r1 = O.triple(*p.r1)
+    r1 = ops_numpy.triple(*p.r1)
     e = UNIT_LOBE_EXPONENT
     lobes = (cos_v, cos_v, one, one, one)  # cos_ls, cos_ci, tail, through, atten: the mirror direction
     modes = dict(interference=plan.interference, band=plan.analytic, dispersion=plan.dispersion, footprint=False)
-    lam = O.triple(*WAVELENGTHS_NM)
+    lam = ops_numpy.triple(*WAVELENGTHS_NM)
     if p.optics == "physical":
-        AR, AT, AI = program.film_amplitudes(O, r1, lam, e, e, p.ks, p.r0, O.triple(*p.r2), O.triple(*p.k2), d,
-                                             cos_v, *lobes, orders=2 if plan.multibeam else 1, **modes)
+        AR, AT, AI = program.film_amplitudes(ops_numpy, r1, lam, e, e, p.ks, p.r0, ops_numpy.triple(*p.r2),
+                                             ops_numpy.triple(*p.k2), d, cos_v, *lobes,
+                                             orders=2 if plan.multibeam else 1, **modes)
     else:
-        AR, AT, AI = program.lobe_amplitudes(O, r1, lam, e, e, p.ks, p.r0, d, cos_v, *lobes, **modes)
+        AR, AT, AI = program.lobe_amplitudes(ops_numpy, r1, lam, e, e, p.ks, p.r0, d, cos_v, *lobes, **modes)
     R = (AR + r1 * r1 * AT + r1 * AI) / cos_v
     out = np.broadcast_to(np.asarray(R, dtype=float), d.shape + (3,)).copy()
     return out[0] if thickness_nm is None else out

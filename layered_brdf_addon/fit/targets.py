@@ -21,6 +21,7 @@ from ..model.sphere import OrthoCamera, Sun, sphere_geometry
 from . import colour_space
 from .cycles_closures import closure_shading, shade_closures, stack_key, stacked_values
 from .environment import Environment
+from .mirror import mirror_reflectance
 from .see_through import far_side, see_through
 
 
@@ -388,8 +389,6 @@ class ReflectanceTarget:
         return cls(np.array(angles), np.array(rgb))
 
     def predict(self, params: LayeredParams) -> np.ndarray:
-        from .mirror import mirror_reflectance
-
         return np.stack([mirror_reflectance(params, a) for a in self.angles])
 
 

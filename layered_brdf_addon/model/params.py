@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any, Iterator, Mapping
 
 from .errors import ParameterError
-from .media import MEDIA, media_names
+from .media import MEDIA, lower_medium_values, media_names
 
 # Representative wavelengths of the R, G and B channels, in nanometres (SPEC).
 WAVELENGTHS_NM = (645.0, 525.0, 445.0)
@@ -284,7 +284,6 @@ class LayeredParams:
         medium = data.get("lower_medium")
         if medium in LOWER_MEDIA and medium != "custom":
             # A named medium fills the lower medium's n and k, unless they are given too.
-            from .media import lower_medium_values
             values.update({k: v for k, v in lower_medium_values(medium).items() if k not in data})
         return cls(**values).validate()
 

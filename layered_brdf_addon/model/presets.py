@@ -5,7 +5,7 @@ Each preset is a mapping of overrides on :class:`LayeredParams` defaults.
 from __future__ import annotations
 
 from .media import layer_index_values
-from .params import LayeredParams
+from .params import LayeredParams, ParameterError
 
 PAPER_PRESETS: dict[str, dict] = {
     # Fig. 3: the diffuse part with thickness from Perlin noise.
@@ -95,6 +95,5 @@ def preset_label(name: str) -> str:
 def preset(name: str) -> LayeredParams:
     """The validated parameters of a named preset."""
     if name not in PRESETS:
-        from .params import ParameterError
         raise ParameterError("preset", name, "one of " + ", ".join(sorted(PRESETS)))
     return LayeredParams.from_dict(PRESETS[name])
