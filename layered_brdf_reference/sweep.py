@@ -3,10 +3,9 @@
 Each configuration is one unit sphere seen by an orthographic camera and lit by a
 zero-angle sun (:func:`layered_brdf_addon.model.sphere.render_spheres`), rendered twice:
 with :func:`~layered_brdf_reference.closures.closure_shading` (what the shaders return,
-as Cycles evaluates it) and with the exact model (:func:`~.exact_spheres.exact_shading`
-for ``accuracy="rgb"``, :func:`spectral_exact_shading` with the same wavelength sampling
-for the spectral modes).  The whole sphere image is compared, so every view angle out to
-the silhouette is covered.
+as Cycles evaluates it) and with the exact model (:func:`~.exact_spheres.exact_shading`,
+in the configuration's accuracy mode: a spectral mode's wavelengths and weights).  The
+whole sphere image is compared, so every view angle out to the silhouette is covered.
 
 The sun is set by its *elevation* ``eps``: the angle above the tangent plane at the mirror
 highlight (where the upper normal bisects sun and view), so the sun is ``180 - 2 eps``
@@ -45,7 +44,6 @@ import numpy as np
 
 from layered_brdf_addon.model.geometry import dot
 from layered_brdf_addon.model.params import ACCURACY_MODES, LayeredParams
-from layered_brdf_addon.model.policy import spectral_count
 from layered_brdf_addon.model.presets import PRESETS
 from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres
 
@@ -192,22 +190,7 @@ def spectral_design(n: int, seed: int = 2004, modes: Sequence[str] = ACCURACY_MO
 
 
 # --------------------------------------------------------------------------
-# Shading.
-def spectral_exact_shading(params: LayeredParams, n0, n1, d, l, v):
-    """The exact model evaluated spectrally at the sampling of ``params.accuracy`` (what its
-    closure form integrates), same signature and units as :func:`exact_shading`."""
-    n = spectral_count(params.accuracy)
-    if not n:
-        return exact_shading(params, n0, n1, d, l, v)
-    s = spectral.spectral_sampling(n)
-    cos_l = np.maximum(dot(n0, l), 0.0)
-    i = np.broadcast_to(-np.asarray(l, dtype=float), np.shape(n0))
-    o = np.broadcast_to(np.asarray(v, dtype=float), np.shape(n0))
-    fs = spectral.spectral_specular(i, o, n0, n1, params.r1, d, params.e0, params.e1, params.r0, s, ng=n0)
-    fd = spectral.spectral_diffuse(params.r1, d, params.r0, s) * np.asarray(params.base_color) / np.pi
-    return cos_l[..., None] * (params.ks * fs + params.kd * fd)
-
-
+# Rendering.
 def camera(resolution: int) -> OrthoCamera:
     return OrthoCamera(width=resolution, height=resolution)
 
@@ -264,7 +247,7 @@ def evaluate(config: SweepConfig, resolution: int, closure: Shading = closure_sh
     p = params if params is not None else config.params()
     cam, sun = camera(resolution), config.sun()
     t0 = time.perf_counter()
-    exact, geo = render_spheres(p, cam, sun, shading=spectral_exact_shading)
+    exact, geo = render_spheres(p, cam, sun, shading=exact_shading)
     approx, _ = render_spheres(p, cam, sun, shading=closure)
     out = image_metrics(approx, exact, geo, sun.l)
     out["seconds"] = time.perf_counter() - t0

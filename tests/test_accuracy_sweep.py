@@ -12,6 +12,7 @@ from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_reference import sweep
 from layered_brdf_reference.closures import closure_shading
 from layered_brdf_reference.exact_model import specular_brdf
+from layered_brdf_reference.exact_spheres import exact_shading
 
 RESOLUTION = 32
 RGB_CONFIGURATIONS = 60
@@ -125,7 +126,7 @@ def _scaled(shading, k):
 def _exact_with_light(transform):
     """The exact model lit from a transformed sun: a highlight in the wrong place."""
     def f(params, n0, n1, d, l, v, **kwargs):
-        return sweep.spectral_exact_shading(params, n0, n1, d, transform(np.asarray(l, dtype=float)), v)
+        return exact_shading(params, n0, n1, d, transform(np.asarray(l, dtype=float)), v)
     return f
 
 
@@ -139,7 +140,7 @@ def probe(rgb_configs):
 def test_exact_against_itself_is_perfect(probe):
     configs, _ = probe
     for c in configs:
-        m = sweep.evaluate(c, RESOLUTION, closure=sweep.spectral_exact_shading)
+        m = sweep.evaluate(c, RESOLUTION, closure=exact_shading)
         assert m["l1"] == 0.0 and m["energy"] == pytest.approx(1.0, abs=1e-12) and m["holes"] == 0
         assert m["de_lit"] == pytest.approx(0.0, abs=1e-9)
 
@@ -147,13 +148,13 @@ def test_exact_against_itself_is_perfect(probe):
 def test_half_of_exact_reads_half(probe):
     configs, _ = probe
     for c in configs:
-        m = sweep.evaluate(c, RESOLUTION, closure=_scaled(sweep.spectral_exact_shading, 0.5))
+        m = sweep.evaluate(c, RESOLUTION, closure=_scaled(exact_shading, 0.5))
         assert m["l1"] == pytest.approx(0.5, abs=1e-9)
         assert m["energy"] == pytest.approx(0.5, abs=1e-9)
         np.testing.assert_allclose(m["energy_rgb"], 0.5, atol=1e-9)
         assert m["holes"] == 0  # 50% is not a hole
         assert m["de_highlight"] > 5.0  # half the luminance is a visible difference
-        tenth = sweep.evaluate(c, RESOLUTION, closure=_scaled(sweep.spectral_exact_shading, 0.1))
+        tenth = sweep.evaluate(c, RESOLUTION, closure=_scaled(exact_shading, 0.1))
         assert tenth["holes"] == tenth["highlight_pixels"] and tenth["l1"] == pytest.approx(0.9, abs=1e-9)
 
 
