@@ -39,13 +39,13 @@ def main(out: str, accuracy: str | None = None) -> None:
     import bpy
 
     import layered_brdf_addon
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import SceneSpec, build_scene, camera_for, render_passes, reset_blender
     from layered_brdf_addon.model.sphere import Sun
 
-    S.reset_blender()
+    reset_blender()
     layered_brdf_addon.register()
-    cam = S.camera_for(1, HEIGHT)
-    [sphere] = S.build_scene(S.SceneSpec(camera=cam, sun=Sun(direction=SUN_DIRECTION, strength=1.0)))
+    cam = camera_for(1, HEIGHT)
+    [sphere] = build_scene(SceneSpec(camera=cam, sun=Sun(direction=SUN_DIRECTION, strength=1.0)))
     bpy.context.view_layer.objects.active = sphere
     if accuracy is None:
         bpy.ops.layered_brdf.load_preset(preset=PRESET)
@@ -54,10 +54,10 @@ def main(out: str, accuracy: str | None = None) -> None:
         from layered_brdf_addon.model import preset
 
         apply_layered_material(sphere, preset(PRESET).replace(accuracy=accuracy), "nodes")
-    cycles = S.render_passes()
+    cycles = render_passes()
     configure_eevee(bpy.context.scene)
     t0 = time.perf_counter()
-    eevee = S.render_passes()
+    eevee = render_passes()
     seconds = time.perf_counter() - t0
     layered_brdf_addon.unregister()
     np.savez(out, cycles=cycles.beauty, eevee=eevee.beauty, eevee_seconds=seconds)

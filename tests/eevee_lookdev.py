@@ -96,13 +96,13 @@ def main(argv) -> None:
     sys.path.insert(0, str(ROOT))
     import bpy  # noqa: F401  (first: it makes mathutils importable)
 
-    from layered_brdf_addon.blender import lookdev as L
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.lookdev import build_lookdev_scene, eevee_engine, remove_scene
+    from layered_brdf_addon.blender.scene import encode_view, passes_from_exr, render_to_exr, shader_failed
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.model.presets import preset
 
     size = a.size
-    scene, ball = L.build_lookdev_scene(size=size, samples=a.cycles_samples)
+    scene, ball = build_lookdev_scene(size=size, samples=a.cycles_samples)
     scene.cycles.seed = a.seed
     ball.pass_index = BALL_INDEX
     scene.view_layers[0].use_pass_object_index = True
@@ -113,22 +113,22 @@ def main(argv) -> None:
             apply_layered_material(ball, preset(name), "nodes", name=name)
             scene.render.engine = "CYCLES"
             exr = Path(tmp) / f"{name}_cycles.exr"
-            result[f"{name}/cycles_seconds"] = np.float64(S.render_to_exr(exr, scene))
+            result[f"{name}/cycles_seconds"] = np.float64(render_to_exr(exr, scene))
             result[f"{name}/mask"] = ball_mask(exr, size)
-            result[f"{name}/cycles"] = S.encode_view(S.passes_from_exr(exr).beauty, scene)
+            result[f"{name}/cycles"] = encode_view(passes_from_exr(exr).beauty, scene)
             if a.eevee_samples <= 0:
                 continue
             configure_eevee(scene, a.eevee_samples)
             exr = Path(tmp) / f"{name}_eevee.exr"
             t0 = time.perf_counter()
-            S.render_to_exr(exr, scene)
+            render_to_exr(exr, scene)
             result[f"{name}/eevee_seconds"] = np.float64(time.perf_counter() - t0)
-            beauty = S.passes_from_exr(exr).beauty
-            result[f"{name}/eevee_failed"] = S.shader_failed(beauty)
-            result[f"{name}/eevee"] = S.encode_view(beauty, scene)
+            beauty = passes_from_exr(exr).beauty
+            result[f"{name}/eevee_failed"] = shader_failed(beauty)
+            result[f"{name}/eevee"] = encode_view(beauty, scene)
     result["view_transform"] = np.array(scene.view_settings.view_transform)
-    result["eevee_engine"] = np.array(L.eevee_engine())
-    L.remove_scene(scene)
+    result["eevee_engine"] = np.array(eevee_engine())
+    remove_scene(scene)
     np.savez(a.out, **result)
 
 

@@ -21,21 +21,22 @@ class RenderedRow:
 
 def render_row(params_list, backend="nodes", sun=SUN_40, height=64, samples=1, plans=None):
     """Reset Blender, put one sphere per parameter set in a row, render once."""
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes,
+                                                  render_passes_osl, reset_blender, row_of_spheres)
     from layered_brdf_addon.blender.material import apply_layered_material
 
-    S.reset_blender()
+    reset_blender()
     n = len(params_list)
-    cam = S.camera_for(n, height)
-    centers = S.row_of_spheres(n)
-    spheres = S.build_scene(S.SceneSpec(camera=cam, sun=sun, centers=centers, samples=samples,
+    cam = camera_for(n, height)
+    centers = row_of_spheres(n)
+    spheres = build_scene(SceneSpec(camera=cam, sun=sun, centers=centers, samples=samples,
                                         osl=(backend == "osl")))
     mats = []
     for k, (obj, p) in enumerate(zip(spheres, params_list)):
         plan = plans[k] if plans else None
         mats.append(apply_layered_material(obj, p, backend, plan=plan, name=f"Layered{k}"))
     if backend == "osl":
-        passes = S.render_passes_osl()
+        passes = render_passes_osl()
     else:
-        passes = S.render_passes()
+        passes = render_passes()
     return RenderedRow(list(params_list), cam, sun, centers, passes, backend, mats)

@@ -18,14 +18,14 @@ from pathlib import Path
 
 import pytest
 
-from layered_brdf_addon.blender import asset_library as AL
-from layered_brdf_addon.blender import assets
+from layered_brdf_addon.blender.asset_library import CATALOG_FILE, LIBRARY_FILE, MANIFEST_FILE, write_asset_library
+from layered_brdf_addon.blender import assets, looks_library
 from layered_brdf_addon.model.params import ParameterError
 
 ROOT = Path(__file__).resolve().parents[1]
 TIMEOUT = 180
 PARTIAL = ".layered_brdf_partial_"
-LIBRARY = sorted([AL.LIBRARY_FILE, AL.CATALOG_FILE, AL.MANIFEST_FILE])
+LIBRARY = sorted([LIBRARY_FILE, CATALOG_FILE, MANIFEST_FILE])
 OLD_LOOKS = ["fig3_clay"]
 NEW_LOOKS = ["fig3_thin_film", "fig3_old_metal"]
 
@@ -66,7 +66,7 @@ def contents(folder: Path) -> dict[str, bytes] | None:
 
 def previous_library(folder: Path) -> dict[str, bytes]:
     """A library written in this process (one look, no previews): what an interrupted build must leave."""
-    AL.write_asset_library(folder, OLD_LOOKS, preview_size=0)
+    write_asset_library(folder, OLD_LOOKS, preview_size=0)
     assert entries(folder) == LIBRARY
     return contents(folder)
 
@@ -205,7 +205,7 @@ def test_the_next_build_removes_only_the_temporary_files_of_dead_builds(tmp_path
         (library / f"{PARTIAL}{dead}_aaaaaaaaaaaa.json").mkdir()  # a folder: never a build's
         (library / f"{PARTIAL}{dead}_bbbbbbbbbbbb.json").symlink_to(library / "notes.txt")
         kept += [f"{PARTIAL}{dead}_aaaaaaaaaaaa.json", f"{PARTIAL}{dead}_bbbbbbbbbbbb.json"]
-        AL.write_asset_library(library, NEW_LOOKS, preview_size=0)
+        write_asset_library(library, NEW_LOOKS, preview_size=0)
         assert entries(library) == sorted(LIBRARY + kept)
     finally:
         sleeper.kill()
@@ -227,7 +227,7 @@ def test_a_full_disk_keeps_the_previous_library_and_leaves_no_partial_file(tmp_p
 
     monkeypatch.setattr(Path, "write_text", disk_fills_up)
     with pytest.raises(OSError) as e:
-        AL.write_asset_library(library, NEW_LOOKS, preview_size=0)
+        write_asset_library(library, NEW_LOOKS, preview_size=0)
     assert e.value.errno == errno.ENOSPC
     assert contents(library) == before
 
@@ -240,14 +240,14 @@ def test_a_failed_rename_puts_the_previous_library_back(tmp_path, monkeypatch, e
     failed = []
 
     def catalogs_cannot_be_placed(src, dst, *args, **kwargs):
-        if Path(dst).name == AL.CATALOG_FILE and not failed:
+        if Path(dst).name == CATALOG_FILE and not failed:
             failed.append(dst)
             raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(dst))
         return real_replace(src, dst, *args, **kwargs)
 
     monkeypatch.setattr(os, "replace", catalogs_cannot_be_placed)
     with pytest.raises(IsADirectoryError):
-        AL.write_asset_library(library, NEW_LOOKS, preview_size=0)
+        write_asset_library(library, NEW_LOOKS, preview_size=0)
     assert failed, "the catalogs' rename was not reached"
     assert contents(library) == before
 
@@ -256,7 +256,7 @@ def test_a_failed_rename_puts_the_previous_library_back(tmp_path, monkeypatch, e
 def _folder_in_place_of(library: Path, name: str) -> Path:
     """``library`` with a folder (holding a file) named ``name``; beside the previous library for the
     catalogs, alone for the record (a folder the library never wrote to)."""
-    if name == AL.CATALOG_FILE:
+    if name == CATALOG_FILE:
         previous_library(library)
         (library / name).unlink()
     else:
@@ -266,7 +266,7 @@ def _folder_in_place_of(library: Path, name: str) -> Path:
     return library / name
 
 
-@pytest.mark.parametrize("name", [AL.CATALOG_FILE, AL.MANIFEST_FILE])
+@pytest.mark.parametrize("name", [CATALOG_FILE, MANIFEST_FILE])
 def test_a_folder_where_a_library_file_belongs_is_refused_before_anything_is_made(tmp_path, monkeypatch, name):
     library = tmp_path / "looks"
     folder = _folder_in_place_of(library, name)
@@ -275,10 +275,10 @@ def test_a_folder_where_a_library_file_belongs_is_refused_before_anything_is_mad
     def too_late(*_args, **_kwargs):
         raise AssertionError("looks made or rendered before the folder was refused")
 
-    monkeypatch.setattr(AL, "_make_looks", too_late)
+    monkeypatch.setattr(looks_library, "_make_looks", too_late)
     monkeypatch.setattr(assets, "render_previews", too_late)
     with pytest.raises(ParameterError) as e:
-        AL.write_asset_library(library, NEW_LOOKS, preview_size=16, samples=1)
+        write_asset_library(library, NEW_LOOKS, preview_size=16, samples=1)
     assert e.value.name == "directory"
     assert f"'{folder}' is a folder" in str(e.value)
     assert contents(library) == before and entries(folder) == ["kept.txt"]
@@ -287,7 +287,7 @@ def test_a_folder_where_a_library_file_belongs_is_refused_before_anything_is_mad
 def test_the_command_line_exits_2_naming_a_catalog_folder_and_changes_nothing(tmp_path, tmpdir_env):
     tmp, env = tmpdir_env
     library = tmp_path / "looks"
-    folder = _folder_in_place_of(library, AL.CATALOG_FILE)
+    folder = _folder_in_place_of(library, CATALOG_FILE)
     before = contents(library)
     res = subprocess.run([sys.executable, "-m", "layered_brdf_addon.blender.asset_library", library,
                           "--presets", *NEW_LOOKS, "--preview-size", "16", "--samples", "1"], cwd=ROOT,

@@ -16,9 +16,13 @@ import numpy as np
 import pytest
 
 import layered_brdf_addon
-from layered_brdf_addon.blender import asset_library as AL
-from layered_brdf_addon.blender import assets, properties, ui, user_presets
-from layered_brdf_addon.blender import scene as S
+from layered_brdf_addon.blender.asset_library import (CATALOG_FILE, LIBRARY_FILE, LIBRARY_NAME, MANIFEST_FILE,
+                                                      all_catalogs, read_catalogs, registered_library,
+                                                      write_asset_library)
+from layered_brdf_addon.blender import assets, library_folder, ui, user_presets
+from layered_brdf_addon.blender.material_values import layered_material_of, params_of, settings
+from layered_brdf_addon.blender.sync import apply_to_object, material_problem, sync_material
+from layered_brdf_addon.blender.scene import reset_blender
 from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.backends import node_group as node_group_builder
 from layered_brdf_addon.model.params import LayeredParams, ParameterError
@@ -37,8 +41,8 @@ COLLECTIONS = ("materials", "node_groups", "scenes", "objects", "meshes", "camer
 @pytest.fixture(scope="module")
 def small_library(tmp_path_factory):
     """Two looks with tiny previews (24 px, 2 samples), written once for the module."""
-    S.reset_blender()
-    return AL.write_asset_library(tmp_path_factory.mktemp("library"), SMALL, preview_size=24, samples=2)
+    reset_blender()
+    return write_asset_library(tmp_path_factory.mktemp("library"), SMALL, preview_size=24, samples=2)
 
 
 def datablocks():
@@ -99,8 +103,8 @@ def test_every_preset_and_user_preset_is_a_named_look_in_a_written_catalog(tmp_p
     try:
         assert bpy.ops.layered_brdf.build_asset_library(directory=str(folder), include_user_presets=True,
                                                         register_library=True, preview_size=0) == {"FINISHED"}
-        added = AL.registered_library(folder)
-        assert added is not None and added.name == AL.LIBRARY_NAME
+        added = registered_library(folder)
+        assert added is not None and added.name == LIBRARY_NAME
         assert len(libs) == len(prefs_before) + 1
     finally:
         for lib in list(libs):
@@ -108,16 +112,16 @@ def test_every_preset_and_user_preset_is_a_named_look_in_a_written_catalog(tmp_p
                 libs.remove(lib)
     assert [(lib.name, lib.path) for lib in libs] == prefs_before
 
-    assert listing(folder) == sorted([AL.LIBRARY_FILE, AL.CATALOG_FILE, AL.MANIFEST_FILE])
+    assert listing(folder) == sorted([LIBRARY_FILE, CATALOG_FILE, MANIFEST_FILE])
     expected = {preset_label(n): n for n in [*ARTIST_PRESETS, *PAPER_PRESETS]} | {"Blue film": "user:Blue film"}
-    assert library_names(folder / AL.LIBRARY_FILE) == sorted(expected)
-    cats = AL.read_catalogs(folder / AL.CATALOG_FILE)
+    assert library_names(folder / LIBRARY_FILE) == sorted(expected)
+    cats = read_catalogs(folder / CATALOG_FILE)
     assert {path for path, _ in cats.values()} == {"Layered BRDF", "Layered BRDF/Artist looks",
                                                   "Layered BRDF/Paper figures", "Layered BRDF/User presets"}
     catalog_of = {"artist": "Layered BRDF/Artist looks", "paper": "Layered BRDF/Paper figures",
                   "user": "Layered BRDF/User presets"}
-    S.reset_blender()
-    looks = append_materials(folder / AL.LIBRARY_FILE)
+    reset_blender()
+    looks = append_materials(folder / LIBRARY_FILE)
     assert sorted(looks) == sorted(expected)
     for name, ident in expected.items():
         mat = looks[name]
@@ -128,8 +132,8 @@ def test_every_preset_and_user_preset_is_a_named_look_in_a_written_catalog(tmp_p
         assert data.license == assets.LICENSE and data.copyright == assets.COPYRIGHT
         assert {t.name for t in data.tags} >= set(assets.BASE_TAGS)
         assert mat.preview is None or tuple(mat.preview.image_size) == (0, 0)  # written without previews
-        assert properties.settings(mat).preset == ident
-        assert_same_params(properties.params_of(mat), user_presets.preset_params(ident))
+        assert settings(mat).preset == ident
+        assert_same_params(params_of(mat), user_presets.preset_params(ident))
 
 
 def test_previews_show_the_ball_in_colour(small_library):
@@ -154,16 +158,16 @@ def test_a_look_dropped_on_an_object_carries_its_preset(small_library):
     obj = add_sphere("Teapot")
     mat = append_materials(small_library.blend, {"Anodised titanium"})["Anodised titanium"]
     obj.data.materials.append(mat)
-    assert properties.layered_material_of(obj) is mat
-    assert_same_params(properties.params_of(mat), preset("anodised_titanium"))
-    assert properties.settings(mat).preset == "anodised_titanium"
-    assert properties.material_problem(mat) is None
-    assert properties.sync_material(mat) is False  # built for its values already: nothing to rebuild
+    assert layered_material_of(obj) is mat
+    assert_same_params(params_of(mat), preset("anodised_titanium"))
+    assert settings(mat).preset == "anodised_titanium"
+    assert material_problem(mat) is None
+    assert sync_material(mat) is False  # built for its values already: nothing to rebuild
     group = shader_node(mat).node_tree
     assert group.get(STAMP) is not None and group.asset_data is None and not group.use_fake_user
     # Editing it from the panel works as on any layered material.
     assert bpy.ops.layered_brdf.load_preset(preset="oil_slick") == {"FINISHED"}
-    assert_same_params(properties.params_of(obj.active_material), preset("oil_slick"))
+    assert_same_params(params_of(obj.active_material), preset("oil_slick"))
 
 
 def test_rewriting_replaces_its_own_files_keeps_other_catalogs_and_the_artists_data(tmp_path):
@@ -172,48 +176,48 @@ def test_rewriting_replaces_its_own_files_keeps_other_catalogs_and_the_artists_d
     mine = load_preset(add_sphere("Jar", u_segments=8, v_segments=4), "glazed_clay")
     mine.name = "Glazed clay"
     mine["mine"] = 1
-    group, values = shader_node(mine).node_tree, properties.params_of(mine)
+    group, values = shader_node(mine).node_tree, params_of(mine)
     before = datablocks()
-    first = AL.write_asset_library(folder, ["glazed_clay"], preview_size=0)
+    first = write_asset_library(folder, ["glazed_clay"], preview_size=0)
     assert datablocks() == before and bpy.data.materials["Glazed clay"] is mine and mine["mine"] == 1
-    assert shader_node(mine).node_tree == group and properties.params_of(mine) == values
+    assert shader_node(mine).node_tree == group and params_of(mine) == values
     assert first.assets == {"Glazed clay": "glazed_clay"}
-    cats_path = folder / AL.CATALOG_FILE
+    cats_path = folder / CATALOG_FILE
     foreign = "0d3b8a3c-2d6e-4f5a-9d4e-9d0b5a1c2e3f:Props/Chairs:Props-Chairs"
     cats_path.write_text(cats_path.read_text() + "\n# the artist's catalogs\n" + foreign + "\n")
     steps = []
-    second = AL.write_asset_library(folder, ["glazed_clay", "oil_slick"], preview_size=0,
+    second = write_asset_library(folder, ["glazed_clay", "oil_slick"], preview_size=0,
                                     progress=lambda done, total: steps.append((done, total)))
     assert steps == [(1, 2), (2, 2)]
     assert datablocks() == before
-    assert listing(folder) == sorted([AL.LIBRARY_FILE, AL.CATALOG_FILE, AL.MANIFEST_FILE])  # no temporary files
+    assert listing(folder) == sorted([LIBRARY_FILE, CATALOG_FILE, MANIFEST_FILE])  # no temporary files
     assert library_names(second.blend) == ["Glazed clay", "Oil slick"]
     text = cats_path.read_text()
     assert text.count(foreign) == 1 and "# the artist's catalogs" in text
-    for catalog in AL.all_catalogs():
+    for catalog in all_catalogs():
         assert text.count(catalog.uuid) == 1
-    cats = AL.read_catalogs(cats_path)
+    cats = read_catalogs(cats_path)
     assert cats["0d3b8a3c-2d6e-4f5a-9d4e-9d0b5a1c2e3f"] == ("Props/Chairs", "Props-Chairs")
-    manifest = json.loads((folder / AL.MANIFEST_FILE).read_text())
-    assert manifest["files"][AL.LIBRARY_FILE] == [hashlib.sha256(second.blend.read_bytes()).hexdigest()]
+    manifest = json.loads((folder / MANIFEST_FILE).read_text())
+    assert manifest["files"][LIBRARY_FILE] == [hashlib.sha256(second.blend.read_bytes()).hexdigest()]
 
 
 def test_a_blend_the_library_did_not_write_is_refused_and_left_untouched(tmp_path, small_library):
     foreign = tmp_path / "foreign"
     foreign.mkdir()
     artist = bpy.data.materials.new("Artist red")
-    bpy.data.libraries.write(str(foreign / AL.LIBRARY_FILE), {artist})
-    (foreign / AL.CATALOG_FILE).write_text("VERSION 1\n")
+    bpy.data.libraries.write(str(foreign / LIBRARY_FILE), {artist})
+    (foreign / CATALOG_FILE).write_text("VERSION 1\n")
     changed = tmp_path / "changed"
     shutil.copytree(small_library.directory, changed)
-    with open(changed / AL.LIBRARY_FILE, "ab") as f:  # the library's file, edited since it was written
+    with open(changed / LIBRARY_FILE, "ab") as f:  # the library's file, edited since it was written
         f.write(b"\0")
     for folder in (foreign, changed):
         files = {p.name: p.read_bytes() for p in folder.iterdir()}
         before = datablocks()
         with pytest.raises(ParameterError) as e:
-            AL.write_asset_library(folder, ["glazed_clay"], preview_size=0)
-        assert e.value.name == "directory" and AL.LIBRARY_FILE in str(e.value)
+            write_asset_library(folder, ["glazed_clay"], preview_size=0)
+        assert e.value.name == "directory" and LIBRARY_FILE in str(e.value)
         assert {p.name: p.read_bytes() for p in folder.iterdir()} == files
         assert datablocks() == before
 
@@ -228,7 +232,7 @@ def test_a_failure_leaves_no_partial_files_and_the_session_as_it_was(tmp_path, m
 
     monkeypatch.setattr(assets, "render_previews", broken)
     with pytest.raises(RuntimeError, match="preview render failed"):
-        AL.write_asset_library(tmp_path / "new", ["oil_slick"], preview_size=16, samples=1)
+        write_asset_library(tmp_path / "new", ["oil_slick"], preview_size=16, samples=1)
     assert not (tmp_path / "new").exists()
     assert datablocks() == before and bpy.data.materials["Oil slick"] is mine
     monkeypatch.undo()
@@ -236,16 +240,16 @@ def test_a_failure_leaves_no_partial_files_and_the_session_as_it_was(tmp_path, m
     folder = tmp_path / "existing"
     shutil.copytree(small_library.directory, folder)
     files = {p.name: p.read_bytes() for p in folder.iterdir()}
-    real_sha256 = AL._sha256
+    real_sha256 = library_folder.sha256
 
     def sha256_fails_on_the_new_file(path):
         if path.name.startswith(".layered_brdf_partial_"):
             raise OSError("disk full")
         return real_sha256(path)
 
-    monkeypatch.setattr(AL, "_sha256", sha256_fails_on_the_new_file)
+    monkeypatch.setattr(library_folder, "sha256", sha256_fails_on_the_new_file)
     with pytest.raises(OSError, match="disk full"):
-        AL.write_asset_library(folder, ["oil_slick"], preview_size=0)
+        write_asset_library(folder, ["oil_slick"], preview_size=0)
     assert {p.name: p.read_bytes() for p in folder.iterdir()} == files
     assert datablocks() == before
 
@@ -261,14 +265,14 @@ def test_bad_input_names_the_parameter_and_writes_nothing(tmp_path):
              (dict(directory=tmp_path / "d", preview_size=64, samples=0), "samples")]
     bad_cats = tmp_path / "bad_cats"
     bad_cats.mkdir()
-    (bad_cats / AL.CATALOG_FILE).write_text("VERSION 7\n")
+    (bad_cats / CATALOG_FILE).write_text("VERSION 7\n")
     cases.append((dict(directory=bad_cats, presets=["oil_slick"], preview_size=0), "directory"))
     before = datablocks()
     for kwargs, name in cases:
         with pytest.raises(ParameterError) as e:
-            AL.write_asset_library(**kwargs)
+            write_asset_library(**kwargs)
         assert e.value.name == name, kwargs
-    assert sorted(listing(tmp_path)) == ["bad_cats", "file.txt"] and listing(bad_cats) == [AL.CATALOG_FILE]
+    assert sorted(listing(tmp_path)) == ["bad_cats", "file.txt"] and listing(bad_cats) == [CATALOG_FILE]
     assert datablocks() == before
 
 
@@ -279,7 +283,7 @@ def test_the_command_line_entry(tmp_path):
                            "--presets", "glazed_clay", "--preview-size", "0"], cwd=env_path,
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert "1 looks in" in proc.stdout and library_names(out / AL.LIBRARY_FILE) == ["Glazed clay"]
+    assert "1 looks in" in proc.stdout and library_names(out / LIBRARY_FILE) == ["Glazed clay"]
     bad = subprocess.run([sys.executable, "-m", "layered_brdf_addon.blender.asset_library", str(out),
                           "--preview-size", "3"], cwd=env_path, capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "'preview_size' = 3" in bad.stderr and "[8, 512]" in bad.stderr
@@ -308,7 +312,7 @@ def test_mark_material_as_asset_catalogs_by_preset_and_its_preview_follows_the_m
     assert np.abs(np.array(mat.preview.image_pixels_float[:]) - first).max() > 0.1
     # Values of no preset: the user catalog (built as a synchronisation does: the preview waits).
     rendered = np.array(mat.preview.image_pixels_float[:])
-    properties.apply_to_object(obj, preset("fig3_clay").replace(d_max=120.0), preview=False)
+    apply_to_object(obj, preset("fig3_clay").replace(d_max=120.0), preview=False)
     assert mat.asset_data.catalog_id == assets.CATALOGS["user"].uuid
     assert np.array_equal(np.array(mat.preview.image_pixels_float[:]), rendered)
     assert [s.name for s in bpy.data.scenes] == ["Scene"]  # the preview scene is gone

@@ -12,9 +12,13 @@ import bpy
 import pytest
 
 import layered_brdf_addon
-from layered_brdf_addon.blender import assets, properties, registration
-from layered_brdf_addon.blender import material as M
-from layered_brdf_addon.blender.material import shader_node
+from layered_brdf_addon.blender import assets, registration
+from layered_brdf_addon.blender.material_values import is_layered, settings
+from layered_brdf_addon.blender.stored_keys import SETTINGS
+from layered_brdf_addon.blender.sync import apply_to_object
+from layered_brdf_addon.blender.animation import animated_paths
+from layered_brdf_addon.blender.material import (NAME_KEY, ROLE_KEY, animated_parameters, apply_layered_material,
+                                                 displaced_material, input_value, param_socket, shader_node)
 from layered_brdf_addon.backends import node_group as node_group_builder
 from layered_brdf_addon.model import preset
 
@@ -94,7 +98,7 @@ def test_a_rebuild_keeps_the_artists_nodes_named_layered_brdf_and_finds_a_rename
     load_preset(obj, "beetle_shell")  # a rebuild
     assert "Layered BRDF.001" in tree.nodes and "Layered BRDF notes" in tree.nodes
     assert shader_node(mat) != tree.nodes["Layered BRDF.001"]
-    assert tree.nodes["Layered BRDF.001"].get(M.ROLE_KEY) is None  # the copy is the artist's node now
+    assert tree.nodes["Layered BRDF.001"].get(ROLE_KEY) is None  # the copy is the artist's node now
     # Renamed by the artist: still the add-on's node; applying makes no second one.
     shader_node(mat).name = "My film"
     assert bpy.ops.layered_brdf.apply() == {"FINISHED"}
@@ -103,14 +107,14 @@ def test_a_rebuild_keeps_the_artists_nodes_named_layered_brdf_and_finds_a_rename
     load_preset(obj, "fig4_parallel")  # a rebuild keeps the artist's name
     assert shader_node(mat).name == "My film"
     assert sorted(n.name for n in layered_nodes(mat)) == ["Layered BRDF.001", "My film"]
-    assert shader_node(mat)[M.ROLE_KEY] == "shader"
+    assert shader_node(mat)[ROLE_KEY] == "shader"
 
 
 def test_a_node_made_before_stamps_is_recognised_by_its_group_and_stamped():
     obj = plain_object()
     mat = load_preset(obj, "fig4_parallel")
     for n in mat.node_tree.nodes:
-        for key in (M.ROLE_KEY, M.NAME_KEY):
+        for key in (ROLE_KEY, NAME_KEY):
             if key in n:
                 del n[key]
     node = shader_node(mat)
@@ -118,7 +122,7 @@ def test_a_node_made_before_stamps_is_recognised_by_its_group_and_stamped():
     nodes_before = len(mat.node_tree.nodes)
     assert shader_node(mat) == node
     assert bpy.ops.layered_brdf.apply() == {"FINISHED"}
-    assert shader_node(mat).name == "Renamed long ago" and shader_node(mat)[M.ROLE_KEY] == "shader"
+    assert shader_node(mat).name == "Renamed long ago" and shader_node(mat)[ROLE_KEY] == "shader"
     assert len(mat.node_tree.nodes) == nodes_before and len(layered_nodes(mat)) == 1
     load_preset(obj, "beetle_shell")  # a rebuild replaces the old AOV outputs, adds none beside them
     assert len(layered_nodes(mat)) == 1
@@ -135,8 +139,8 @@ def test_apply_writes_the_slot_linked_to_the_object_and_remove_restores_it():
     obj_mat = bpy.data.materials.new("Object material")
     obj.material_slots[0].material = obj_mat
     assert bpy.ops.layered_brdf.apply() == {"FINISHED"}
-    assert properties.is_layered(obj.active_material)
-    assert properties.is_layered(obj.material_slots[0].material)
+    assert is_layered(obj.active_material)
+    assert is_layered(obj.material_slots[0].material)
     assert obj.data.materials[0] == mesh_mat  # the mesh (maybe shared) is left alone
     assert bpy.ops.layered_brdf.remove() == {"FINISHED"}
     assert obj.material_slots[0].material == obj_mat and obj.material_slots[0].link == "OBJECT"
@@ -150,7 +154,7 @@ def test_the_replaced_material_survives_save_and_remove_puts_it_back(tmp_path):
     obj.data.materials.append(artist)
     assert bpy.ops.layered_brdf.apply() == {"FINISHED"}
     mat = obj.active_material
-    assert mat != artist and M.displaced_material(mat) == artist
+    assert mat != artist and displaced_material(mat) == artist
     assert artist.users >= 1
     save_and_reopen(tmp_path / "displaced.blend")
     assert "Artist red" in bpy.data.materials
@@ -179,7 +183,7 @@ def test_effect_changes_leave_no_unused_groups_and_never_remove_the_artists(tmp_
     save_and_reopen(tmp_path / "piles.blend")
     assert unused_own_groups() == []
     assert "Layered BRDF [mine]" in bpy.data.node_groups and kept_group in bpy.data.node_groups
-    used = {shader_node(m).node_tree.name for m in bpy.data.materials if properties.is_layered(m)}
+    used = {shader_node(m).node_tree.name for m in bpy.data.materials if is_layered(m)}
     assert {g.name for g in bpy.data.node_groups if g.get(STAMP) is not None} == used
 
 
@@ -187,10 +191,10 @@ def test_switching_from_osl_to_nodes_removes_the_osl_text_only():
     notes = bpy.data.texts.new("layered_brdf_notes.osl")  # the artist's, unstamped
     notes.from_string("// my notes")
     obj = plain_object()
-    properties.apply_to_object(obj, preset("fig4_parallel"), backend="osl")
+    apply_to_object(obj, preset("fig4_parallel"), backend="osl")
     mat = obj.active_material
     assert shader_node(mat).bl_idname == "ShaderNodeScript"
-    properties.settings(mat).backend = "nodes"  # the panel's switch rebuilds the material
+    settings(mat).backend = "nodes"  # the panel's switch rebuilds the material
     assert shader_node(mat).bl_idname == "ShaderNodeGroup"
     assert [t.name for t in bpy.data.texts] == ["layered_brdf_notes.osl"]
 
@@ -226,25 +230,25 @@ def test_reapply_adds_a_deleted_material_output_and_relinks_the_shader():
 def test_keyframes_keep_driving_a_node_rebuilt_without_a_depsgraph_update():
     obj = plain_object()
     params = preset("fig4_parallel")
-    mat = M.apply_layered_material(obj, params)
+    mat = apply_layered_material(obj, params)
     node = shader_node(mat)
     node.name = "My film"
-    sock = M.param_socket(node, "ks")[0]
+    sock = param_socket(node, "ks")[0]
     sock.default_value = 0.25
     sock.keyframe_insert("default_value", frame=1)
     sock.default_value = 0.75
     sock.keyframe_insert("default_value", frame=10)
     build = mat["layered_brdf_build"]
-    M.apply_layered_material(obj, params.replace(normal_mode="tilted", tilt=10.0))  # no update in between
+    apply_layered_material(obj, params.replace(normal_mode="tilted", tilt=10.0))  # no update in between
     assert mat["layered_brdf_build"] != build
     node = shader_node(mat)
     assert node.name == "My film"
-    paths = list(M._animated_paths(mat.node_tree))
-    assert len(paths) == 1 and mat.node_tree.path_resolve(paths[0].rsplit(".", 1)[0]) == M.param_socket(node, "ks")[0]
-    assert "ks" in M.animated_parameters(mat)
+    paths = list(animated_paths(mat.node_tree))
+    assert len(paths) == 1 and mat.node_tree.path_resolve(paths[0].rsplit(".", 1)[0]) == param_socket(node, "ks")[0]
+    assert "ks" in animated_parameters(mat)
     for frame, value in ((1, 0.25), (10, 0.75)):
         bpy.context.scene.frame_set(frame)
-        assert M.input_value(shader_node(mat), "ks") == pytest.approx(value)
+        assert input_value(shader_node(mat), "ks") == pytest.approx(value)
 
 
 # --- 7: registration ------------------------------------------------------------------------
@@ -299,24 +303,24 @@ def test_two_copies_never_register_side_by_side_and_each_removes_only_its_own(se
         with pytest.raises(RuntimeError, match=r"already enabled from 'layered_brdf_addon'"):
             copy.register()
         copy.unregister()  # what Blender may call after a failed register: leaves the first copy alone
-        assert hasattr(bpy.types.Material, properties.SETTINGS)
+        assert hasattr(bpy.types.Material, SETTINGS)
         assert sorted(_own_handlers(first)) == ["on_depsgraph_update", "on_load_post"]
         assert _own_handlers(second) == []
         assert all(registration._registered_versions(cls) for cls in registration.CLASSES)
         obj = plain_object()  # the survivor works
         mat = load_preset(obj, "oil_slick")
-        assert properties.settings(mat).preset == "oil_slick"
+        assert settings(mat).preset == "oil_slick"
         # The other way round.
         layered_brdf_addon.unregister()
         copy.register()
         with pytest.raises(RuntimeError, match=r"already enabled from 'lbcopy.layered_brdf_addon'"):
             layered_brdf_addon.register()
         layered_brdf_addon.unregister()
-        assert hasattr(bpy.types.Material, properties.SETTINGS)
+        assert hasattr(bpy.types.Material, SETTINGS)
         assert sorted(_own_handlers(second)) == ["on_depsgraph_update", "on_load_post"]
         assert _own_handlers(first) == []
         copy.unregister()
-        assert not hasattr(bpy.types.Material, properties.SETTINGS)
+        assert not hasattr(bpy.types.Material, SETTINGS)
         assert _own_handlers(first) == [] and _own_handlers(second) == []
         assert not hasattr(bpy.types, "LAYERED_BRDF_OT_apply")
     finally:

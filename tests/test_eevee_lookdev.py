@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import eevee_lookdev as E
+import eevee_lookdev
 
 SIZE = 64
 CYCLES_SAMPLES = 32
@@ -21,13 +21,13 @@ MAX_MEAN_DELTA_E = 7.0  # measured 4.9 (beetle_shell) and 2.7 (glazed_clay) on B
 
 @pytest.mark.slow
 def test_eevee_colours_stay_within_the_stated_delta_e_of_cycles(tmp_path):
-    r = E.run(tmp_path / "r.npz", SIZE, CYCLES_SAMPLES, EEVEE_SAMPLES, PRESETS, timeout=300)
+    r = eevee_lookdev.run(tmp_path / "r.npz", SIZE, CYCLES_SAMPLES, EEVEE_SAMPLES, PRESETS, timeout=300)
     assert str(r["view_transform"]) == "AgX"
     for name in PRESETS:
         mask = r[f"{name}/mask"]
         assert mask.sum() > 0.2 * SIZE * SIZE, name  # the ball fills the middle of the frame
         assert not r[f"{name}/eevee_failed"][mask].any(), f"{name}: EEVEE's shader failed (magenta)"
-        de = E.delta_e2000(r[f"{name}/cycles"], r[f"{name}/eevee"], mask)
+        de = eevee_lookdev.delta_e2000(r[f"{name}/cycles"], r[f"{name}/eevee"], mask)
         print(f"{name}: mean CIEDE2000 EEVEE vs Cycles {de.mean():.2f} (p95 {np.percentile(de, 95):.2f}); "
               f"EEVEE {float(r[f'{name}/eevee_seconds']):.1f} s")
         assert de.mean() <= MAX_MEAN_DELTA_E, (name, float(de.mean()))

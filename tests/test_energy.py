@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.model import PRESETS, preset
-from layered_brdf_reference import closures as C
+from layered_brdf_reference.closures import evaluate_closures, shade_closures
 from layered_brdf_addon.model.geometry import dot
 from layered_brdf_reference.lighting import environment_shading
 from layered_brdf_addon.model.policy import plan_effects
@@ -20,13 +20,13 @@ PARAMS = [preset(n).replace(thickness_mode="height", base_layer="none") for n in
 
 @pytest.fixture(scope="module")
 def furnace():
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import render_passes, set_uniform_environment
 
     from render_helpers import render_row
 
     row = render_row(PARAMS, backend="nodes", height=32, samples=128)
-    S.set_uniform_environment(1.0)
-    row.passes = S.render_passes()
+    set_uniform_environment(1.0)
+    row.passes = render_passes()
     return row
 
 
@@ -46,8 +46,8 @@ def test_white_furnace_albedo_matches_closure_form(furnace, name):
     d = thickness_field(p)(geo.p_object[idx[:, 0], idx[:, 1]])
     n1 = lower_normal(p, n0, geo.p_object[idx[:, 0], idx[:, 1]], d)
     def shading(params, n0_, n1_, d_, l, v):
-        res = C.shade_closures(params, n0_, n1_, d_, v, plan_effects(params))
-        return C.evaluate_closures(res, n0_, v, l, params.lobe)
+        res = shade_closures(params, n0_, n1_, d_, v, plan_effects(params))
+        return evaluate_closures(res, n0_, v, l, params.lobe)
 
     want = environment_shading(p, n0, n1, d, geo.view, samples=256, shading=shading).mean(0)
     got = furnace.passes.beauty[idx[:, 0], idx[:, 1]].mean(0)

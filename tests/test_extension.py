@@ -127,12 +127,12 @@ def _child(zip_path: str, out: str) -> None:
         hasattr(bpy.types.Material, "layered_brdf_settings")
 
     # The installed package's own modules, not the checkout's.
-    S = importlib.import_module(PACKAGE + ".layered_brdf_addon.blender.scene")
+    ext_scene = importlib.import_module(PACKAGE + ".layered_brdf_addon.blender.scene")
     model = importlib.import_module(PACKAGE + ".layered_brdf_addon.model")
     closures = importlib.import_module("layered_brdf_reference.closures")  # the test oracle is not shipped
-    cam = S.camera_for(1, 64)
+    cam = ext_scene.camera_for(1, 64)
     sun = model.Sun(direction=(0.0, -np.cos(np.radians(40.0)), np.sin(np.radians(40.0))), strength=1.0)
-    [sphere] = S.build_scene(S.SceneSpec(camera=cam, sun=sun))
+    [sphere] = ext_scene.build_scene(ext_scene.SceneSpec(camera=cam, sun=sun))
     bpy.context.view_layer.objects.active = sphere
     bpy.ops.layered_brdf.load_preset(preset=PRESET)
     mat = sphere.active_material
@@ -148,7 +148,7 @@ def _child(zip_path: str, out: str) -> None:
     assert os.path.isfile(r["preset_file"])
     bpy.ops.layered_brdf.load_preset(preset="user:Extension test")
 
-    passes = S.render_passes()
+    passes = ext_scene.render_passes()
     beauty = passes.beauty
     r["finite"] = bool(np.all(np.isfinite(beauty)))
     expected, geo = model.render_spheres([model.preset(PRESET)], cam, sun, thickness=passes.thickness,

@@ -347,11 +347,11 @@ def test_osl_compile_in_blender_leaves_no_temp_files(tmp_path, tmpdir_env):
     code = """
 import os, sys, tempfile
 import bpy
-from layered_brdf_addon.blender import scene as S
+from layered_brdf_addon.blender.scene import SceneSpec, build_scene, reset_blender
 from layered_brdf_addon.blender.material import apply_layered_material
 from layered_brdf_addon.model.presets import preset
-S.reset_blender()
-obj = S.build_scene(S.SceneSpec(osl=True))[0]
+reset_blender()
+obj = build_scene(SceneSpec(osl=True))[0]
 apply_layered_material(obj, preset("fig3_thin_film"), "osl")
 apply_layered_material(obj, preset("fig4_tilted"), "osl")
 session = os.path.basename(os.path.normpath(bpy.app.tempdir))

@@ -94,19 +94,20 @@ def test_the_numpy_twin_matches_cycles_under_an_hdri(name):
     import bpy
 
     from layered_brdf_addon.blender import lookdev
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, reset_blender,
+                                                  set_hdri_environment)
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.blender.principled_target import environment_of
     from layered_brdf_addon.fit import colour_space
     from layered_brdf_addon.model.sphere import lower_normal, sphere_geometry, thickness_field
 
-    S.reset_blender()
+    reset_blender()
     p = preset(name).replace(thickness_mode="height", base_layer="none")
-    spec = S.SceneSpec(camera=S.camera_for(1, 64), samples=256, threads=2)
-    [sphere] = S.build_scene(spec)
-    S.set_hdri_environment(lookdev.hdri_path("forest.exr"))
+    spec = SceneSpec(camera=camera_for(1, 64), samples=256, threads=2)
+    [sphere] = build_scene(spec)
+    set_hdri_environment(lookdev.hdri_path("forest.exr"))
     sphere.data.materials.append(apply_layered_material(bpy.data.materials.new(name), p))
-    observed = S.render_passes().beauty
+    observed = render_passes().beauty
     geo = sphere_geometry(spec.camera)
     rows, cols = np.nonzero(geo.mask)
     n0, p_obj = geo.n0[rows, cols], geo.p_object[rows, cols]

@@ -16,9 +16,13 @@ import bpy
 import numpy as np
 import pytest
 
-from layered_brdf_addon.blender import fit_operator, lookdev, properties, ui
-from layered_brdf_addon.blender import material as M
-from layered_brdf_addon.blender import scene as S
+from layered_brdf_addon.blender import fit_operator, lookdev, ui
+from layered_brdf_addon.blender.material_values import is_layered, params_of, settings
+from layered_brdf_addon.blender.stored_keys import BUILD_KEY
+from layered_brdf_addon.blender.sync import apply_to_object
+from layered_brdf_addon.blender.material import input_value, shader_node
+from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_to_exr, reset_blender,
+                                              row_of_spheres)
 from layered_brdf_addon.cli.sidecar import SIDECAR_FORMAT, camera_to_dict, sun_to_dict, write_json
 from layered_brdf_addon.blender.sidecar_views import sidecar_views
 from layered_brdf_addon.fit.solve import FitCancelled
@@ -41,23 +45,23 @@ def layered_object(name="oil_slick"):
 
 def state(mat):
     """What a fit may change: the parameters, the build and the shader node."""
-    node = M.shader_node(mat)
-    return properties.params_of(mat).to_dict(), mat.get(properties.BUILD_KEY), node.as_pointer()
+    node = shader_node(mat)
+    return params_of(mat).to_dict(), mat.get(BUILD_KEY), node.as_pointer()
 
 
 def test_the_function_fits_a_numpy_target_and_applies_the_result():
     _, mat = layered_object()
     result = fit_operator.fit_material_to(mat, views_of(TRUTH, SUNS), START, **SHORT)
     assert result.mean_delta_e <= 0.5
-    fitted = properties.params_of(mat)
-    node = M.shader_node(mat)
+    fitted = params_of(mat)
+    node = shader_node(mat)
     for name in ("d_min", "d_max", "kd"):
-        assert M.input_value(node, name) == pytest.approx(getattr(result.params, name), rel=1e-5)
+        assert input_value(node, name) == pytest.approx(getattr(result.params, name), rel=1e-5)
         assert getattr(fitted, name) == pytest.approx(getattr(TRUTH, name), rel=0.05)
-    assert fitted.thickness_mode == "height" and properties.settings(mat).thickness_mode == "height"
-    assert properties.settings(mat).preset == ""
+    assert fitted.thickness_mode == "height" and settings(mat).thickness_mode == "height"
+    assert settings(mat).preset == ""
     bpy.context.view_layer.update()  # the panel's handler finds the material in step with its settings
-    assert properties.params_of(mat).to_dict() == fitted.to_dict()
+    assert params_of(mat).to_dict() == fitted.to_dict()
 
 
 def test_a_cancelled_fit_changes_nothing():
@@ -121,7 +125,7 @@ def test_the_modal_fit_shows_its_progress_and_applies_the_result():
     context = modal_context()
     op = RunningFit(mat, {"starts": 0, "steps_per_start": 4, "vary": ("kd",)})
     assert op.run(context) == {"FINISHED"}
-    assert properties.params_of(mat).kd == pytest.approx(op._job.result.params.kd)
+    assert params_of(mat).kd == pytest.approx(op._job.result.params.kd)
     [(kind, text)] = op.reports
     assert kind == "INFO" and "mean CIEDE2000" in text
     wm = [c[0] for c in context.window_manager.calls]
@@ -174,11 +178,11 @@ def reference_render(tmp_path, params, name="target"):
     ``layered-brdf render`` (a multilayer EXR and STEM.json)."""
     from layered_brdf_addon.blender.material import apply_layered_material
 
-    camera, sun = S.camera_for(1, 64), SUNS[1]
-    [sphere] = S.build_scene(S.SceneSpec(camera=camera, sun=sun))
+    camera, sun = camera_for(1, 64), SUNS[1]
+    [sphere] = build_scene(SceneSpec(camera=camera, sun=sun))
     apply_layered_material(sphere, params)
     stem = tmp_path / name
-    S.render_to_exr(stem.with_suffix(".exr"))
+    render_to_exr(stem.with_suffix(".exr"))
     write_json(stem.with_suffix(".json"), {
         "format": SIDECAR_FORMAT, "version": 1, "scene": "reference", "params": params.to_dict(),
         "camera": camera_to_dict(camera), "sun": sun_to_dict(sun), "centers": [[0.0, 0.0, 0.0]],
@@ -191,12 +195,12 @@ def test_the_operator_fits_to_a_render_s_sidecar(tmp_path, monkeypatch):
     sidecar = reference_render(tmp_path, TRUTH)
     [view] = sidecar_views(sidecar)
     assert view.image.shape == (64, 64, 3) and view.image.max() > 0.0
-    S.reset_blender()
+    reset_blender()
     obj, mat = layered_object()
-    properties.apply_to_object(obj, START)
+    apply_to_object(obj, START)
     monkeypatch.setattr(fit_operator, "FIT_OPTIONS", SHORT)
     assert bpy.ops.layered_brdf.fit_to_render(source="RENDER", filepath=str(sidecar), start="CURRENT") == {"FINISHED"}
-    fitted = properties.params_of(mat)
+    fitted = params_of(mat)
     # One sun shows the film's mean thickness (its order), less so how far it spreads.
     assert fitted.d_min + fitted.d_max == pytest.approx(TRUTH.d_min + TRUTH.d_max, rel=0.1)
     assert (fitted.d_min, fitted.d_max) != (START.d_min, START.d_max)
@@ -213,7 +217,7 @@ def test_the_operator_fits_to_a_principled_material_of_the_file(monkeypatch):
     result = bpy.ops.layered_brdf.fit_to_render(source="PRINCIPLED", principled=film.name, start="oil_slick")
     assert result == {"FINISHED"}
     mat = obj.active_material
-    assert properties.is_layered(mat) and properties.params_of(mat).thickness_mode == "height"
+    assert is_layered(mat) and params_of(mat).thickness_mode == "height"
     assert {k: {b.as_pointer() for b in getattr(bpy.data, k)} for k in kinds} == before
     assert film.users == 0  # lent to the target's sphere, given back
 
@@ -242,10 +246,10 @@ def test_a_sidecar_that_is_not_a_reference_render_says_why(tmp_path):
         sidecar_views(tmp_path / "blend.json")
     with pytest.raises(TargetError, match="missing.json"):
         sidecar_views(tmp_path / "missing.json")
-    camera, sun = S.camera_for(2, 16), SUNS[0]
+    camera, sun = camera_for(2, 16), SUNS[0]
     write_json(tmp_path / "gallery.json", {
         "format": SIDECAR_FORMAT, "scene": "gallery", "tiles": [{"params": {}}, {"params": {}}],
-        "camera": camera_to_dict(camera), "sun": sun_to_dict(sun), "centers": S.row_of_spheres(2)})
+        "camera": camera_to_dict(camera), "sun": sun_to_dict(sun), "centers": row_of_spheres(2)})
     with pytest.raises(TargetError, match="2 sphere"):
         sidecar_views(tmp_path / "gallery.json", sphere=2)
     with pytest.raises(TargetError, match="EXR"):

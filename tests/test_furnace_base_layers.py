@@ -24,7 +24,7 @@ NOISE = 0.03  # the 95th percentile of a 64-sample render sits this far above it
 
 
 def furnace_row(params_list, own_base: list[bool]):
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import render_passes, set_uniform_environment
 
     from render_helpers import render_row
 
@@ -41,8 +41,8 @@ def furnace_row(params_list, own_base: list[bool]):
     scene.cycles.samples = SAMPLES
     scene.cycles.max_bounces = 8
     scene.cycles.transparent_max_bounces = 8
-    S.set_uniform_environment(1.0)
-    row.passes = S.render_passes()
+    set_uniform_environment(1.0)
+    row.passes = render_passes()
     return row
 
 

@@ -61,11 +61,12 @@ CASES = cases()
 
 def _socket(node, name):
     """A parameter's socket, or the Normal or Base Color socket (the node group's or the OSL name)."""
-    from layered_brdf_addon.blender import material as M
+    from layered_brdf_addon.blender.material import param_socket
+    from layered_brdf_addon.blender.sockets import find_socket
 
     if name in {spec.name for spec in iter_sockets()}:
-        return M.param_socket(node, name)[0]
-    return M._socket(node.inputs, name)
+        return param_socket(node, name)[0]
+    return find_socket(node.inputs, name)
 
 
 def _linked_nan(tree, socket):
@@ -91,14 +92,15 @@ def _linked_nan(tree, socket):
 
 @pytest.fixture(scope="module", params=BACKENDS)
 def rendered(request):
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, reset_blender,
+                                                  row_of_spheres)
     from layered_brdf_addon.blender.material import apply_layered_material, shader_node
 
     backend = request.param
-    S.reset_blender()
+    reset_blender()
     n = 2 * len(CASES)
-    cam = S.camera_for(n, PX)
-    spheres = S.build_scene(S.SceneSpec(camera=cam, sun=SUN_40, centers=S.row_of_spheres(n), samples=1,
+    cam = camera_for(n, PX)
+    spheres = build_scene(SceneSpec(camera=cam, sun=SUN_40, centers=row_of_spheres(n), samples=1,
                                         osl=(backend == "osl")))
     for k, (label, base, name, bad, good) in enumerate(CASES):
         for j, value in enumerate((bad, good)):
@@ -116,7 +118,7 @@ def rendered(request):
                 mat.node_tree.links.new(comb.outputs[0], sock)
             else:
                 sock.default_value = value
-    passes = S.render_passes()
+    passes = render_passes()
     return backend, passes.beauty
 
 

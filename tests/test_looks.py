@@ -7,10 +7,11 @@ import bpy
 import numpy as np
 import pytest
 
-from layered_brdf_addon.blender import scene as S
+from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, reset_blender,
+                                              row_of_spheres)
 from layered_brdf_addon.blender.lookdev import hdri_path
 from layered_brdf_addon.blender.material import apply_layered_material, shader_node
-from layered_brdf_reference import look_bounds as L
+from layered_brdf_reference.look_bounds import LOOKS, equirect_lookup, failures, measure, mirror_directions
 from layered_brdf_addon.model.base_layers import base_node, phong_to_roughness
 from layered_brdf_addon.model.presets import ARTIST_PRESETS, preset
 from layered_brdf_addon.model.sphere import Sun, sphere_geometry
@@ -47,11 +48,11 @@ def looks():
 def measure_rows(hdri: str = HDRIS[0]) -> tuple[dict, np.ndarray]:
     """Every row on a sphere under the HDRI, no sun: the statistics of each sphere's pixels,
     and the render (linear)."""
-    S.reset_blender()
+    reset_blender()
     n = len(ROWS)
-    cam = S.camera_for(n, SIZE)
-    centers = S.row_of_spheres(n)
-    spheres = S.build_scene(S.SceneSpec(camera=cam, sun=Sun(strength=0.0), centers=centers, samples=SAMPLES))
+    cam = camera_for(n, SIZE)
+    centers = row_of_spheres(n)
+    spheres = build_scene(SceneSpec(camera=cam, sun=Sun(strength=0.0), centers=centers, samples=SAMPLES))
     scene = bpy.context.scene
     scene.cycles.max_bounces = 4  # a clear film shows what lies behind it
     tree = scene.world.node_tree
@@ -62,35 +63,35 @@ def measure_rows(hdri: str = HDRIS[0]) -> tuple[dict, np.ndarray]:
     tree.links.new(env.outputs["Color"], background.inputs["Color"])
     for k, (obj, (_, params)) in enumerate(zip(spheres, ROWS)):
         apply_layered_material(obj, params, "nodes", name=f"Look{k}")
-    beauty = S.render_passes().beauty[..., :3]
+    beauty = render_passes().beauty[..., :3]
     geo = sphere_geometry(cam, centers)
     w, h = env.image.size
     pixels = np.empty(w * h * 4, dtype=np.float32)
     env.image.pixels.foreach_get(pixels)
-    mirrored = L.equirect_lookup(pixels.reshape(h, w, 4), L.mirror_directions(geo.n0, geo.view))
+    mirrored = equirect_lookup(pixels.reshape(h, w, 4), mirror_directions(geo.n0, geo.view))
     stats = {}
     for k, (name, _) in enumerate(ROWS):
-        look = L.LOOKS[name.removeprefix("replaced ")]
-        stats[name] = L.measure(beauty, mirrored, geo.mask & (geo.sphere == k), look)
+        look = LOOKS[name.removeprefix("replaced ")]
+        stats[name] = measure(beauty, mirrored, geo.mask & (geo.sphere == k), look)
     return stats, beauty
 
 
 def test_every_artist_preset_has_a_look():
-    assert set(L.LOOKS) == set(ARTIST_PRESETS)
+    assert set(LOOKS) == set(ARTIST_PRESETS)
 
 
 @pytest.mark.keeps_scene
 @pytest.mark.parametrize("hdri", HDRIS)
 @pytest.mark.parametrize("name", list(ARTIST_PRESETS))
 def test_preset_looks_like_its_name(looks, name, hdri):
-    assert L.failures(name, looks[hdri][name]) == [], f"{name} should read as {L.LOOKS[name].description} " \
+    assert failures(name, looks[hdri][name]) == [], f"{name} should read as {LOOKS[name].description} " \
                                                       f"under {hdri}"
 
 
 @pytest.mark.keeps_scene
 @pytest.mark.parametrize("name", list(REPLACED))
 def test_the_replaced_look_fails_the_check(looks, name):
-    assert L.failures(name, looks[HDRIS[0]][f"replaced {name}"]) != []
+    assert failures(name, looks[HDRIS[0]][f"replaced {name}"]) != []
 
 
 def test_a_metal_base_follows_the_base_colour_and_the_upper_roughness():
@@ -142,8 +143,8 @@ if __name__ == "__main__":  # the measured table of docs/looks.md
     for hdri in sys.argv[1:] or HDRIS:
         rows, _ = measure_rows(hdri)
         for name, st in rows.items():
-            look = L.LOOKS[name.removeprefix("replaced ")]
+            look = LOOKS[name.removeprefix("replaced ")]
             share = f"{st.hue_share:.0%}" if look.hues else "-"
-            fails = L.failures(name.removeprefix("replaced "), st)
+            fails = failures(name.removeprefix("replaced "), st)
             print(f"| {name} | {hdri} | {look.description} | {share} | {st.saturation:.2f} | {st.sectors} "
                   f"| {st.reflects:.2f} | {st.luminance:.3f} | {'yes' if not fails else 'no: ' + '; '.join(fails)} |")

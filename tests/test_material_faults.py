@@ -21,8 +21,11 @@ import pytest
 
 import layered_brdf_addon
 from layered_brdf_addon.backends import node_group as node_group_builder
-from layered_brdf_addon.blender import material as M
+from layered_brdf_addon.blender.material import (MATERIAL_KEY, apply_layered_material, input_value, param_socket,
+                                                 read_inputs, remove_layered_material, shader_node)
 from layered_brdf_addon.blender import properties, ui
+from layered_brdf_addon.blender.stored_keys import ENUMS_KEY
+from layered_brdf_addon.blender.sync import material_problem, on_depsgraph_update, sync_material, upgrade_all
 from layered_brdf_addon.model import preset
 from layered_brdf_addon.model.params import LayeredParams, ParameterError, iter_sockets
 
@@ -70,7 +73,7 @@ def socket_values_of(params):
 
 
 def socket_values(mat):
-    return socket_values_of(M.read_inputs(M.shader_node(mat)))
+    return socket_values_of(read_inputs(shader_node(mat)))
 
 
 def remove_group_input(group, name):
@@ -90,13 +93,13 @@ def test_a_grease_pencil_object_is_refused_by_name_and_keeps_its_materials():
     before = slot_names(gp)
     materials = len(bpy.data.materials)
     with pytest.raises(ParameterError) as e:
-        M.apply_layered_material(gp, preset("fig4_parallel"))
+        apply_layered_material(gp, preset("fig4_parallel"))
     message = str(e.value)
     assert f"object '{gp.name}' ({gp.type})" in message and "Grease Pencil materials" in message, message
     assert "mesh" in message and "'target'" not in message, message
     assert e.value.name == "object" and e.value.value == gp.name
     assert slot_names(gp) == before and len(bpy.data.materials) == materials
-    assert M.remove_layered_material(gp) is False and slot_names(gp) == before
+    assert remove_layered_material(gp) is False and slot_names(gp) == before
     # The panel and its buttons are not offered for it.
     activate(gp)
     assert not ui.LAYERED_BRDF_PT_material.poll(bpy.context)
@@ -109,7 +112,7 @@ def test_objects_without_material_slots_are_refused_naming_the_object_and_its_ty
     for obj in non_surface_objects():
         for target in (obj, obj.name):
             with pytest.raises(ParameterError) as e:
-                M.apply_layered_material(target)
+                apply_layered_material(target)
             message = str(e.value)
             assert message.startswith(f"object '{obj.name}' ({obj.type}) has no material slots: choose a mesh"), \
                 message
@@ -168,17 +171,17 @@ def test_a_linked_object_is_refused_and_its_slots_stay_as_saved(tmp_path):
     materials = len(bpy.data.materials)
     for obj in (bare, by_data, "Bare"):
         with pytest.raises(ParameterError) as e:
-            M.apply_layered_material(obj, preset("fig4_parallel"))
+            apply_layered_material(obj, preset("fig4_parallel"))
         assert "is linked from" in str(e.value) and "make it local first" in str(e.value), str(e.value)
         assert e.value.name == "object"
     with pytest.raises(ParameterError, match="make it local first"):
-        M.remove_layered_material(by_data)
+        remove_layered_material(by_data)
     assert len(bpy.data.materials) == materials
     assert (slot_names(bare), slot_names(by_data)) == ([], ["Red"])
     assert "make it local first" in " ".join(panel_labels(bare, alert=True))
     save_and_reopen(tmp_path / "user.blend")
     assert (slot_names(bpy.data.objects["Bare"]), slot_names(bpy.data.objects["ByData"])) == ([], ["Red"])
-    assert not [m for m in bpy.data.materials if m.get(M.MATERIAL_KEY)]
+    assert not [m for m in bpy.data.materials if m.get(MATERIAL_KEY)]
 
 
 def test_a_library_override_takes_the_material_in_its_own_slot_only(tmp_path):
@@ -197,15 +200,15 @@ def test_a_library_override_takes_the_material_in_its_own_slot_only(tmp_path):
     local = {o.name: o for o in bpy.data.objects if o.library is None and o.override_library is not None}
     for name in ("ByData", "NoSlot"):
         with pytest.raises(ParameterError, match="linked from|library override") as e:
-            M.apply_layered_material(local[name], preset("fig4_parallel"))
+            apply_layered_material(local[name], preset("fig4_parallel"))
         assert f"object '{name}'" in str(e.value), str(e.value)
-    name = M.apply_layered_material(local["ByObject"], preset("fig4_parallel")).name
+    name = apply_layered_material(local["ByObject"], preset("fig4_parallel")).name
     assert slot_names(local["ByObject"]) == [name]
     save_and_reopen(tmp_path / "user.blend")
     local = {o.name: o for o in bpy.data.objects if o.library is None and o.override_library is not None}
     assert (slot_names(local["ByData"]), slot_names(local["NoSlot"])) == (["Red"], [])
     assert slot_names(local["ByObject"]) == [name]
-    assert M.remove_layered_material(local["ByObject"]) is True
+    assert remove_layered_material(local["ByObject"]) is True
     assert slot_names(local["ByObject"]) == ["Red"]
 
 
@@ -232,15 +235,15 @@ def _open_upgraded(path, capfd):
 
 
 def _current(mat) -> bool:
-    return M.shader_node(mat).node_tree.get(STAMP) == node_group_builder.build_stamp()
+    return shader_node(mat).node_tree.get(STAMP) == node_group_builder.build_stamp()
 
 
 def _remove_base_green(mats):
-    remove_group_input(M.shader_node(mats["Linked and keyed"]).node_tree, "base_g")
+    remove_group_input(shader_node(mats["Linked and keyed"]).node_tree, "base_g")
 
 
 def _junk_enum_record(mats):
-    mats["Linked and keyed"][properties.ENUMS_KEY] = 0.5
+    mats["Linked and keyed"][ENUMS_KEY] = 0.5
 
 
 @pytest.mark.parametrize("damage", [_remove_base_green, _junk_enum_record])
@@ -248,27 +251,27 @@ def test_one_damaged_material_in_an_older_file_leaves_the_others_upgraded(tmp_pa
     mats, err = _open_upgraded(_saved_legacy(tmp_path, damage), capfd)
     assert "Traceback" not in err, err
     assert _current(mats["Shared A"]) and _current(mats["Shared B"])
-    assert M.shader_node(mats["Shared A"]).node_tree == M.shader_node(mats["Shared B"]).node_tree
+    assert shader_node(mats["Shared A"]).node_tree == shader_node(mats["Shared B"]).node_tree
     damaged = mats["Linked and keyed"]
     if damage is _junk_enum_record:  # an unreadable record reads as absent: the material upgrades
-        assert _current(damaged) and properties.material_problem(damaged) is None
+        assert _current(damaged) and material_problem(damaged) is None
         return
     assert not _current(damaged)  # left as saved, and the panel says why
-    problem = properties.material_problem(damaged)
+    problem = material_problem(damaged)
     assert problem is not None and "'base_g'" in problem and "Rebuild or load a preset" in problem, problem
     obj = next(o for o in bpy.data.objects if o.active_material == damaged)
     assert problem in panel_labels(obj, alert=True)
-    assert properties.upgrade_all() == []
-    value = M.read_inputs(M.shader_node(damaged)).r1_r
+    assert upgrade_all() == []
+    value = read_inputs(shader_node(damaged)).r1_r
     activate(obj)
     assert bpy.ops.layered_brdf.apply() == {"FINISHED"}  # Rebuild repairs it, from its own sockets
-    assert _current(damaged) and properties.material_problem(damaged) is None
-    assert M.read_inputs(M.shader_node(damaged)).r1_r == pytest.approx(value)
+    assert _current(damaged) and material_problem(damaged) is None
+    assert read_inputs(shader_node(damaged)).r1_r == pytest.approx(value)
 
 
 def test_nan_and_infinities_in_an_older_file_read_as_the_bounds_and_upgrade(tmp_path, capfd):
     def hostile(mats):
-        node = M.shader_node(mats["Linked and keyed"])
+        node = shader_node(mats["Linked and keyed"])
         node.inputs["r1_r"].default_value = math.nan
         node.inputs["e1"].default_value = math.inf
         node.inputs["tilt"].default_value = -math.inf
@@ -276,9 +279,9 @@ def test_nan_and_infinities_in_an_older_file_read_as_the_bounds_and_upgrade(tmp_
     mats, err = _open_upgraded(_saved_legacy(tmp_path, hostile), capfd)
     assert "Traceback" not in err, err
     mat = mats["Linked and keyed"]
-    assert properties.material_problem(mat) is None
+    assert material_problem(mat) is None
     assert all(_current(m) for m in mats.values())
-    values = M.read_inputs(M.shader_node(mat))
+    values = read_inputs(shader_node(mat))
     specs = {name: LayeredParams.spec(name) for name in ("r1_r", "e1", "tilt")}
     assert (values.r1_r, values.e1, values.tilt) == \
         pytest.approx((specs["r1_r"].min, specs["e1"].max, specs["tilt"].min))
@@ -287,37 +290,37 @@ def test_nan_and_infinities_in_an_older_file_read_as_the_bounds_and_upgrade(tmp_
 def test_a_deleted_group_input_is_reported_and_reapplying_the_same_preset_repairs_it(capfd):
     a, b = plain_object("A"), plain_object("B")
     mat_a, mat_b = load_preset(a, "fig4_parallel"), load_preset(b, "fig4_parallel")
-    M.param_socket(M.shader_node(mat_b), "r0")[0].default_value = 1.25
-    group = M.shader_node(mat_a).node_tree
-    assert M.shader_node(mat_b).node_tree == group
+    param_socket(shader_node(mat_b), "r0")[0].default_value = 1.25
+    group = shader_node(mat_a).node_tree
+    assert shader_node(mat_b).node_tree == group
     remove_group_input(group, "Layer IOR (Red)")
     for mat in (mat_a, mat_b):
-        problem = properties.material_problem(mat)
+        problem = material_problem(mat)
         assert problem is not None and "'r1_r' (Layer IOR (Red))" in problem, problem
         with pytest.raises(ParameterError, match="r1_r"):
-            properties.sync_material(mat)
-    assert properties.upgrade_all() == []
+            sync_material(mat)
+    assert upgrade_all() == []
     capfd.readouterr()
     updates = SimpleNamespace(mode="VIEWPORT", updates=[SimpleNamespace(id=mat_a), SimpleNamespace(id=mat_b)])
-    properties.on_depsgraph_update(bpy.context.scene, updates)
+    on_depsgraph_update(bpy.context.scene, updates)
     assert "Traceback" not in capfd.readouterr().err
     labels = panel_labels(a)
-    assert properties.material_problem(mat_a) in labels
+    assert material_problem(mat_a) in labels
     assert f"{properties.param_label(LayeredParams.spec('r1_r'))}: not on the node (Rebuild adds it)" in labels
     # The same preset rebuilds the node (a node whose group lacks an input is not current).
     assert load_preset(a, "fig4_parallel") == mat_a
-    assert properties.material_problem(mat_a) is None
+    assert material_problem(mat_a) is None
     assert socket_values(mat_a) == pytest.approx(socket_values_of(preset("fig4_parallel")))
     # The other material keeps the damaged group, and says so, until it is applied again; then
     # the damaged group, unused, is gone.
-    assert M.shader_node(mat_b).node_tree != M.shader_node(mat_a).node_tree
-    assert properties.material_problem(mat_b) is not None
+    assert shader_node(mat_b).node_tree != shader_node(mat_a).node_tree
+    assert material_problem(mat_b) is not None
     activate(b)
     assert bpy.ops.layered_brdf.apply() == {"FINISHED"}
-    assert properties.material_problem(mat_b) is None
-    assert M.shader_node(mat_b).node_tree == M.shader_node(mat_a).node_tree
-    assert M.input_value(M.shader_node(mat_b), "r0") == pytest.approx(1.25)
-    assert [g for g in bpy.data.node_groups if g.get(STAMP) is not None] == [M.shader_node(mat_a).node_tree]
+    assert material_problem(mat_b) is None
+    assert shader_node(mat_b).node_tree == shader_node(mat_a).node_tree
+    assert input_value(shader_node(mat_b), "r0") == pytest.approx(1.25)
+    assert [g for g in bpy.data.node_groups if g.get(STAMP) is not None] == [shader_node(mat_a).node_tree]
 
 
 # --- the Python API's arguments --------------------------------------------------------------
@@ -325,25 +328,25 @@ def test_the_python_api_names_a_wrong_argument_and_takes_names_and_dicts():
     obj = plain_object("Cube")
     red = bpy.data.materials.new("Red")
     obj.data.materials.append(red)
-    for call, argument in ((lambda: M.apply_layered_material(None), "target"),
-                           (lambda: M.apply_layered_material(obj.data), "target"),
-                           (lambda: M.apply_layered_material(obj, 42), "params"),
-                           (lambda: M.apply_layered_material(obj, plan="SDN"), "plan"),
-                           (lambda: M.remove_layered_material(None), "obj"),
-                           (lambda: M.remove_layered_material("Nope"), "obj")):
+    for call, argument in ((lambda: apply_layered_material(None), "target"),
+                           (lambda: apply_layered_material(obj.data), "target"),
+                           (lambda: apply_layered_material(obj, 42), "params"),
+                           (lambda: apply_layered_material(obj, plan="SDN"), "plan"),
+                           (lambda: remove_layered_material(None), "obj"),
+                           (lambda: remove_layered_material("Nope"), "obj")):
         with pytest.raises(ParameterError) as e:
             call()
         assert e.value.name == argument and f"parameter '{argument}'" in str(e.value), str(e.value)
     assert "an object (bpy.types.Object) or its name" in str(pytest.raises(
-        ParameterError, M.remove_layered_material, 3).value)
+        ParameterError, remove_layered_material, 3).value)
     with pytest.raises(ParameterError, match="'no_such'"):
-        M.apply_layered_material(obj, {"no_such": 1.0})
+        apply_layered_material(obj, {"no_such": 1.0})
     with pytest.raises(ParameterError, match="'d_min'"):
-        M.apply_layered_material(obj, {"d_min": 500.0, "d_max": 100.0})
+        apply_layered_material(obj, {"d_min": 500.0, "d_max": 100.0})
     assert slot_names(obj) == ["Red"]
-    mat = M.apply_layered_material("Cube", {"d_min": 120.0, "d_max": 340.0, "lobe": "beckmann"})
-    assert (M.input_value(M.shader_node(mat), "d_min"), M.input_value(M.shader_node(mat), "d_max")) == \
+    mat = apply_layered_material("Cube", {"d_min": 120.0, "d_max": 340.0, "lobe": "beckmann"})
+    assert (input_value(shader_node(mat), "d_min"), input_value(shader_node(mat), "d_max")) == \
         (pytest.approx(120.0), pytest.approx(340.0))
     assert slot_names(obj) == [mat.name]
-    assert M.remove_layered_material("Cube") is True
+    assert remove_layered_material("Cube") is True
     assert slot_names(obj) == ["Red"]

@@ -19,8 +19,9 @@ import pytest
 
 import layered_brdf_addon
 from layered_brdf_addon.backends import node_group as node_group_builder
-from layered_brdf_addon.blender import material as M
-from layered_brdf_addon.blender import scene as S
+from layered_brdf_addon.blender.material import (animated_parameters, input_linked, input_value, read_inputs,
+                                                 shader_node)
+from layered_brdf_addon.blender.scene import render_passes
 from layered_brdf_addon.model.params import iter_sockets
 from layered_brdf_reference.compare import agreement
 
@@ -36,17 +37,17 @@ def _legacy_state(tmp_path):
     layered_brdf_addon.unregister()  # so that opening it runs no upgrade
     bpy.ops.wm.open_mainfile(filepath=str(LEGACY))
     mats = {m.name: m for m in bpy.data.materials}
-    node_a = M.shader_node(mats["Shared A"])
+    node_a = shader_node(mats["Shared A"])
     assert node_a.inputs.get("d_min") is not None and node_a.inputs.get("Thickness Min") is None
     node_a.inputs["Base Color"].default_value = TINT
     tree_b = mats["Shared B"].node_tree
-    node_b = M.shader_node(mats["Shared B"])
+    node_b = shader_node(mats["Shared B"])
     checker = tree_b.nodes.new("ShaderNodeTexChecker")
     checker.name = "Artist checker"
     checker.inputs["Scale"].default_value = 3.0
     tree_b.links.new(checker.outputs["Fac"], node_b.inputs["base_g"])
-    values = {name: M.read_inputs(M.shader_node(m)) for name, m in mats.items()}
-    beauty = S.render_passes().beauty
+    values = {name: read_inputs(shader_node(m)) for name, m in mats.items()}
+    beauty = render_passes().beauty
     path = tmp_path / "legacy.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     return path, values, beauty
@@ -59,14 +60,14 @@ def test_a_file_with_the_older_sockets_opens_migrated_and_renders_the_same(tmp_p
     try:
         bpy.ops.wm.open_mainfile(filepath=str(path))  # load_post rebuilds the stale materials
         mats = {m.name: m for m in bpy.data.materials}
-        nodes = {name: M.shader_node(m) for name, m in mats.items()}
+        nodes = {name: shader_node(m) for name, m in mats.items()}
         for name, node in nodes.items():
             assert node.node_tree.get(node_group_builder.STAMP_KEY) == node_group_builder.build_stamp(), name
             assert node.inputs.get("Thickness Min") is not None and node.inputs.get("d_min") is None
             assert node.inputs.get("base_r") is None
-            migrated = M.read_inputs(node)
+            migrated = read_inputs(node)
             for spec in iter_sockets():
-                if not M.input_linked(node, spec.name):
+                if not input_linked(node, spec.name):
                     assert getattr(migrated, spec.name) == pytest.approx(getattr(values[name], spec.name)), \
                         (name, spec.name)
         # One group for the two materials that shared one; the outdated groups are gone.
@@ -75,7 +76,7 @@ def test_a_file_with_the_older_sockets_opens_migrated_and_renders_the_same(tmp_p
         assert all(g.get(node_group_builder.STAMP_KEY) in (None, node_group_builder.build_stamp())
                    for g in bpy.data.node_groups if g.get(node_group_builder.STAMP_KEY) is not None)
         # The tint is folded into the base colour; the linked channel feeds it through the artist's nodes.
-        assert M.input_value(nodes["Shared A"], "base_r") == pytest.approx(values["Shared A"].base_r)
+        assert input_value(nodes["Shared A"], "base_r") == pytest.approx(values["Shared A"].base_r)
         base_b = nodes["Shared B"].inputs["Base Color"]
         assert base_b.is_linked and base_b.links[0].from_node.bl_idname == "ShaderNodeCombineColor"
         combine = base_b.links[0].from_node
@@ -87,8 +88,8 @@ def test_a_file_with_the_older_sockets_opens_migrated_and_renders_the_same(tmp_p
         assert node.inputs["Thickness Min"].links[0].from_node == tree.nodes["Artist value"]
         paths = [fc.data_path for fc in tree.animation_data.action.layers[0].strips[0].channelbags[0].fcurves]
         assert [tree.path_resolve(p.rsplit(".", 1)[0]) for p in paths] == [node.inputs["Upper Exponent"]]
-        assert "e0" in M.animated_parameters(mats["Linked and keyed"])
-        after = S.render_passes().beauty
+        assert "e0" in animated_parameters(mats["Linked and keyed"])
+        after = render_passes().beauty
         mask = np.any(before[..., :3] > 0.0, axis=-1)
         ag = agreement(after[..., :3], before[..., :3], mask, rel_tol=REL_TOL)
         assert ag.failing_fraction <= MAX_FAILING, ag

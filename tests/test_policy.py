@@ -99,7 +99,8 @@ def test_thick_layer_keyframed_thin_keeps_interference_on_both_frames():
     animated), and both frames render as the closure form of that shader predicts."""
     import bpy
 
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, reset_blender,
+                                                  row_of_spheres)
     from layered_brdf_addon.blender.material import animated_parameters, apply_layered_material, input_value, param_socket, shader_node
     from layered_brdf_reference.closures import closure_shading
     from layered_brdf_reference.compare import agreement, lit_mask
@@ -109,10 +110,10 @@ def test_thick_layer_keyframed_thin_keeps_interference_on_both_frames():
     p = BASE.replace(accuracy="spectral16", d_min=THICK, d_max=THICK)
     dropped = plan_effects(p)
     assert dropped.interference is False  # what a still thick layer gets
-    S.reset_blender()
-    cam = S.camera_for(1, 48)
-    centers = S.row_of_spheres(1)
-    [obj] = S.build_scene(S.SceneSpec(camera=cam, sun=SUN_40, centers=centers))
+    reset_blender()
+    cam = camera_for(1, 48)
+    centers = row_of_spheres(1)
+    [obj] = build_scene(SceneSpec(camera=cam, sun=SUN_40, centers=centers))
     mat = apply_layered_material(obj, p, "nodes")
     assert mat["layered_brdf_build"] == f"nodes:{dropped.key}:{p.base_layer}"
     node = shader_node(mat)
@@ -137,7 +138,7 @@ def test_thick_layer_keyframed_thin_keeps_interference_on_both_frames():
     for frame, d in frames.items():
         scene.frame_set(frame)
         assert input_value(shader_node(mat), "d_min") == pytest.approx(d)
-        beauty = S.render_passes().beauty
+        beauty = render_passes().beauty
         params = p.replace(d_min=d, d_max=d)
         expected, geo = render_spheres([params], cam, SUN_40, centers, shading=shaded)
         mask = lit_mask(geo, SUN_40.l)

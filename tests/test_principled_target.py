@@ -16,8 +16,10 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.blender import fit_operator, lookdev
-from layered_brdf_addon.blender import principled_target as P
-from layered_brdf_addon.blender import scene as S
+from layered_brdf_addon.blender.principled_target import (DEFAULT_SUNS, REFERENCE_WORLD, principled_materials,
+                                                          principled_views, principled_views_of, start_for,
+                                                          uniform_film)
+from layered_brdf_addon.blender.scene import SceneSpec, build_scene, render_passes, reset_blender
 from layered_brdf_addon.blender.material import apply_layered_material
 from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.targets import SphereTarget
@@ -67,7 +69,7 @@ def artists_file():
     bpy.ops.render.render()
     result = bpy.data.images["Render Result"]
     result.render_slots.active_index = 2
-    world = bpy.data.worlds.new(P.REFERENCE_WORLD)
+    world = bpy.data.worlds.new(REFERENCE_WORLD)
     background = world.node_tree.nodes["Background"]
     background.inputs["Color"].default_value = (0.2, 0.3, 0.4, 1.0)
     background.inputs["Strength"].default_value = 0.5
@@ -81,8 +83,8 @@ def test_a_thin_film_renders_on_the_reference_sphere_and_the_file_stays_as_it_wa
     mat = soap_film()
     nodes = sorted((n.name, n.bl_idname) for n in mat.node_tree.nodes)
     before, users = datablocks(), mat.users
-    views = P.principled_views_of(mat, size=SIZE)
-    assert [v.sun for v in views] == list(P.DEFAULT_SUNS)
+    views = principled_views_of(mat, size=SIZE)
+    assert [v.sun for v in views] == list(DEFAULT_SUNS)
     for view in views:
         assert view.image.shape == (SIZE, SIZE, 3) and np.all(np.isfinite(view.image))
         geo = sphere_geometry(view.camera, view.centers)
@@ -93,7 +95,7 @@ def test_a_thin_film_renders_on_the_reference_sphere_and_the_file_stays_as_it_wa
         spread = (rgb.max(axis=-1) - rgb.min(axis=-1)) / np.maximum(rgb.max(axis=-1), 1e-9)
         assert spread.max() > 0.2  # interference colours, not a grey highlight
     assert datablocks() == before
-    assert bpy.context.scene == scene and scene.world == world and world.name == P.REFERENCE_WORLD
+    assert bpy.context.scene == scene and scene.world == world and world.name == REFERENCE_WORLD
     background = world.node_tree.nodes["Background"]
     assert tuple(background.inputs["Color"].default_value) == pytest.approx((0.2, 0.3, 0.4, 1.0))
     assert background.inputs["Strength"].default_value == pytest.approx(0.5)
@@ -104,8 +106,8 @@ def test_a_thin_film_renders_on_the_reference_sphere_and_the_file_stays_as_it_wa
 @pytest.mark.slow
 def test_a_blend_file_material_is_rendered_by_name(tmp_path):
     path = saved(tmp_path, soap_film("Bubble"))
-    S.reset_blender()
-    views = P.principled_views(path, "Bubble", size=32, suns=P.DEFAULT_SUNS[:1])
+    reset_blender()
+    views = principled_views(path, "Bubble", size=32, suns=DEFAULT_SUNS[:1])
     assert len(views) == 1 and views[0].image.shape == (32, 32, 3) and views[0].image.max() > 0.0
 
 
@@ -116,22 +118,22 @@ def test_a_material_that_is_not_principled_is_refused_by_name(tmp_path):
     bubble = soap_film("Bubble")
     for value in (glow, "Bubble", None):
         with pytest.raises(ParameterError) as e:
-            P.principled_views_of(value)
+            principled_views_of(value)
         assert e.value.name == "material"
     with pytest.raises(ParameterError, match="Principled BSDF node"):
-        P.principled_views_of(glow)
+        principled_views_of(glow)
     with pytest.raises(ParameterError) as e:
-        P.principled_views_of(bubble, size=0)
+        principled_views_of(bubble, size=0)
     assert e.value.name == "size"
     path = saved(tmp_path, glow, bubble)
     for name in ("Missing", "Glow"):
         with pytest.raises(ParameterError, match="Principled") as e:
-            P.principled_views(path, name)
+            principled_views(path, name)
         assert e.value.name == "material" and e.value.value == name
     with pytest.raises(ParameterError) as e:
-        P.principled_views(tmp_path / "nowhere.blend", "Bubble")
+        principled_views(tmp_path / "nowhere.blend", "Bubble")
     assert e.value.name == "blend"
-    assert [m.name for m in P.principled_materials()] == ["Bubble"]
+    assert [m.name for m in principled_materials()] == ["Bubble"]
 
 
 # --- conversions ------------------------------------------------------------------------------
@@ -159,10 +161,10 @@ def rendered_delta_e(params, views, white_y) -> list[float]:
     rendered by Cycles in the reference scene, over the sphere's lit pixels."""
     out = []
     for view in views:
-        S.reset_blender()
-        [sphere] = S.build_scene(S.SceneSpec(camera=view.camera, sun=view.sun, centers=view.centers))
+        reset_blender()
+        [sphere] = build_scene(SceneSpec(camera=view.camera, sun=view.sun, centers=view.centers))
         apply_layered_material(sphere, params)
-        beauty = S.render_passes().beauty
+        beauty = render_passes().beauty
         geo = sphere_geometry(view.camera, view.centers)
         lit = geo.mask & (geo.n0 @ view.sun.l > 0.0)
         lab = [colour_space.lab(np.maximum(img[lit], 0.0), white_y) for img in (view.image, beauty)]
@@ -175,9 +177,9 @@ def rendered_delta_e(params, views, white_y) -> list[float]:
 def test_a_principled_thin_film_converts_to_a_layered_material(name):
     make, start, fitted_bound, rendered_bound = CONVERSIONS[name]
     material = make()
-    views = P.principled_views_of(material, size=96)
+    views = principled_views_of(material, size=96)
     t0, cpu0 = time.perf_counter(), time.process_time()
-    result = fit_operator.run_fit(views, P.start_for(preset(start), material))
+    result = fit_operator.run_fit(views, start_for(preset(start), material))
     seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     rendered = rendered_delta_e(result.params, views, SphereTarget(views).white_y)
     print(f"{name} from {start}: fitted mean CIEDE2000 {result.mean_delta_e:.2f}, rendered "
@@ -191,10 +193,10 @@ def test_a_film_of_one_thickness_is_fitted_by_height_a_textured_one_keeps_its_pa
     uniform = soap_film()
     textured = lookdev.principled_thin_film("Patchy", 300.0, 1.4, (0.1, 0.1, 0.1), 0.0, 0.3,
                                             thickness_noise=(100.0, 500.0, 4.0, 2.0, 0.5))
-    assert P.uniform_film(uniform) and not P.uniform_film(textured)
+    assert uniform_film(uniform) and not uniform_film(textured)
     noise = preset("oil_slick")
     assert noise.thickness_mode == "noise"
-    assert P.start_for(noise, uniform) == noise.replace(thickness_mode="height")
-    assert P.start_for(noise, textured) == noise
+    assert start_for(noise, uniform) == noise.replace(thickness_mode="height")
+    assert start_for(noise, textured) == noise
     height = preset("soap_bubble")
-    assert P.start_for(height, uniform) == height
+    assert start_for(height, uniform) == height

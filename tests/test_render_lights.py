@@ -21,14 +21,14 @@ L1_BOUND = 0.08
 
 
 def _scene(samples):
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import SceneSpec, build_scene, camera_for, reset_blender
     from layered_brdf_addon.blender.material import apply_layered_material
 
-    S.reset_blender()
-    cam = S.camera_for(1, 48)
-    spheres = S.build_scene(S.SceneSpec(camera=cam, sun=Sun(), samples=samples))
+    reset_blender()
+    cam = camera_for(1, 48)
+    spheres = build_scene(SceneSpec(camera=cam, sun=Sun(), samples=samples))
     apply_layered_material(spheres[0], PARAMS, "nodes")
-    return S, cam
+    return cam
 
 
 def _pixels(cam):
@@ -40,9 +40,11 @@ def _pixels(cam):
 
 
 def test_uniform_environment():
-    S, cam = _scene(samples=256)
-    S.set_uniform_environment(1.0)
-    img = S.render_passes().beauty
+    from layered_brdf_addon.blender.scene import render_passes, set_uniform_environment
+
+    cam = _scene(samples=256)
+    set_uniform_environment(1.0)
+    img = render_passes().beauty
     geo, mask, n0, d = _pixels(cam)
     expected = environment_shading(PARAMS, n0, n0, d, geo.view, samples=1024)
     err = relative_l1(img[mask], expected, np.ones(len(n0), bool))
@@ -51,7 +53,9 @@ def test_uniform_environment():
 
 
 def test_area_light():
-    S, cam = _scene(samples=256)
+    from layered_brdf_addon.blender.scene import render_passes, set_area_light
+
+    cam = _scene(samples=256)
     l = np.array([np.sin(np.radians(40.0)), -np.cos(np.radians(40.0)), 0.0])
     z = l
     x = np.cross([0.0, 0.0, 1.0], z)
@@ -59,8 +63,8 @@ def test_area_light():
     y = np.cross(z, x)
     m = np.eye(4)
     m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, y, z, 4.0 * l
-    S.set_area_light(m, size=1.5, power=300.0)
-    img = S.render_passes().beauty
+    set_area_light(m, size=1.5, power=300.0)
+    img = render_passes().beauty
     geo, mask, n0, d = _pixels(cam)
     expected = area_light_shading(PARAMS, n0, n0, d, geo.view, geo.p_world[mask], m, 1.5, 300.0, samples=576)
     lit = expected.sum(-1) > 1e-4 * expected.sum(-1).max()

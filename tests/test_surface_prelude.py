@@ -48,14 +48,15 @@ def swapped_params():
 
 @pytest.fixture(scope="module", params=BACKENDS)
 def rendered(request):
-    from layered_brdf_addon.blender import scene as S
+    from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes,
+                                                  render_passes_osl, reset_blender, row_of_spheres)
     from layered_brdf_addon.blender.material import apply_layered_material, param_socket, shader_node
 
     backend = request.param
-    S.reset_blender()
-    cam = S.camera_for(2, HEIGHT)
-    centers = S.row_of_spheres(2)
-    spheres = S.build_scene(S.SceneSpec(camera=cam, sun=SUN_40, centers=centers, samples=1,
+    reset_blender()
+    cam = camera_for(2, HEIGHT)
+    centers = row_of_spheres(2)
+    spheres = build_scene(SceneSpec(camera=cam, sun=SUN_40, centers=centers, samples=1,
                                         osl=(backend == "osl")))
     m = object_matrix()
     obj = spheres[0]
@@ -74,7 +75,7 @@ def rendered(request):
         tree.links.new(v.outputs[0], param_socket(node, socket)[0])
     # The linked sockets count as animated: re-applying keeps the thickness pattern.
     apply_layered_material(spheres[1], SWAPPED_BASE, backend, name="Swapped")
-    passes = S.render_passes_osl() if backend == "osl" else S.render_passes()
+    passes = render_passes_osl() if backend == "osl" else render_passes()
     matrices = [np.array(m), None]
     expected, geo = render_spheres([CORRELATED, swapped_params()], cam, SUN_40, centers, prefer_analytic=True,
                                    shading=closure_shading, matrices=matrices)

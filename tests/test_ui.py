@@ -18,10 +18,16 @@ import numpy as np
 import pytest
 
 import layered_brdf_addon
-from layered_brdf_addon.blender import osl, properties, registration, ui, user_presets
-from layered_brdf_addon.blender import scene as S
-from layered_brdf_addon.blender import material as M
-from layered_brdf_addon.blender.material import shader_node
+from layered_brdf_addon.blender import osl, properties, registration, sync, ui, user_presets
+from layered_brdf_addon.blender.material_values import params_of, settings
+from layered_brdf_addon.blender.stored_keys import SETTINGS
+from layered_brdf_addon.blender.sync import (apply_to_object, desired, material_problem, on_depsgraph_update,
+                                             on_load_post)
+from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, render_passes_osl,
+                                              reset_blender, row_of_spheres, shader_failed)
+from layered_brdf_addon.blender.material import (SUBGROUP_KEY, animated_parameters, input_value, param_socket,
+                                                 shader_node)
+from layered_brdf_addon.blender.sockets import find_socket
 from layered_brdf_addon.model import LayeredParams, preset, render_spheres
 from layered_brdf_reference.closures import closure_shading
 from layered_brdf_reference.compare import agreement, lit_mask
@@ -38,16 +44,16 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def spheres(n=1, height=64, osl=False):
-    S.reset_blender()
-    cam = S.camera_for(n, height)
-    centers = S.row_of_spheres(n)
-    objs = S.build_scene(S.SceneSpec(camera=cam, sun=SUN, centers=centers, osl=osl))
+    reset_blender()
+    cam = camera_for(n, height)
+    centers = row_of_spheres(n)
+    objs = build_scene(SceneSpec(camera=cam, sun=SUN, centers=centers, osl=osl))
     return objs, cam, centers
 
 
 def plain_object():
     """A new file holding one small sphere in a Cycles scene (for tests that do not render)."""
-    S.reset_blender()
+    reset_blender()
     return add_sphere("Small", u_segments=16, v_segments=8)
 
 
@@ -65,7 +71,7 @@ def osl_built_for(mat, plan):
 
 def socket_values(mat):
     node = shader_node(mat)
-    return {s.name: M.input_value(node, s.name) for s in iter_sockets()}
+    return {s.name: input_value(node, s.name) for s in iter_sockets()}
 
 
 def expected_closure_form(params_list, cam, centers, passes):
@@ -82,7 +88,7 @@ def assert_matches(beauty, expected, geo, k, label):
 # --- registration --------------------------------------------------------------------------
 def _leftovers():
     out = []
-    if hasattr(bpy.types.Material, properties.SETTINGS):
+    if hasattr(bpy.types.Material, SETTINGS):
         out.append("Material property")
     out += [cls.__name__ for cls in registration.CLASSES if registration._registered_versions(cls)]
     for handlers in (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.load_post):
@@ -92,8 +98,8 @@ def _leftovers():
 
 def test_register_twice_then_unregister_leaves_nothing():
     layered_brdf_addon.register()  # already registered by the fixture
-    assert sum(f is properties.on_depsgraph_update for f in bpy.app.handlers.depsgraph_update_post) == 1
-    assert sum(f is properties.on_load_post for f in bpy.app.handlers.load_post) == 1
+    assert sum(f is on_depsgraph_update for f in bpy.app.handlers.depsgraph_update_post) == 1
+    assert sum(f is on_load_post for f in bpy.app.handlers.load_post) == 1
     assert all(cls.is_registered for cls in registration.CLASSES)
     layered_brdf_addon.unregister()
     try:
@@ -120,14 +126,14 @@ def test_settings_and_panel_come_from_param_specs():
     drawn = {e[3]: e for e in log if e[0] == "prop"}
     node = shader_node(mat)
     for spec in PARAM_SPECS:
-        sock, channel = M.param_socket(node, spec.name) if spec.socket else (None, None)
+        sock, channel = param_socket(node, spec.name) if spec.socket else (None, None)
         text = sock.name if channel is not None else properties.param_label(spec)  # a colour: drawn once
         assert text in drawn, f"{spec.name} not drawn"
         data, prop = drawn[text][1], drawn[text][2]
         if spec.socket:  # floats are the shader's own sockets: keyframes on them animate renders
             assert data == sock and prop == "default_value"
         else:
-            assert data == properties.settings(mat) and prop == spec.name
+            assert data == settings(mat) and prop == spec.name
     assert "Thickness min (nm)" in drawn and "Tilt (\u00b0)" in drawn and "Base Color" in drawn
 
     infos = [e[3].param for e in log if e[0] == "operator" and e[1] == "layered_brdf.param_info"]
@@ -142,8 +148,8 @@ def test_osl_backend_warns_when_the_scene_cannot_run_it():
     obj = plain_object()
     mat = load_preset(obj, "fig4_parallel")
     values = socket_values(mat)
-    properties.settings(mat).backend = "osl"  # the update callback rebuilds the material
-    assert osl_built_for(mat, properties.desired(mat)[2])
+    settings(mat).backend = "osl"  # the update callback rebuilds the material
+    assert osl_built_for(mat, desired(mat)[2])
     assert socket_values(mat) == pytest.approx(values)
     warnings = labels(draw_panels(obj), alert=True)
     assert any("OSL will not run" in w and "Open Shading Language option is off" in w for w in warnings), warnings
@@ -151,16 +157,16 @@ def test_osl_backend_warns_when_the_scene_cannot_run_it():
     assert bpy.context.scene.cycles.shading_system
     assert labels(draw_panels(obj), alert=True) == []
     # Phong lobes exist only in OSL: back on the node backend the material stays as it is and says why.
-    properties.settings(mat).lobe = "phong"
-    plan = properties.desired(mat)[2]
+    settings(mat).lobe = "phong"
+    plan = desired(mat)[2]
     assert plan.lobe == "phong" and osl_built_for(mat, plan)
-    properties.settings(mat).backend = "nodes"
+    settings(mat).backend = "nodes"
     assert shader_node(mat).bl_idname == "ShaderNodeScript"
-    assert "lobe" in properties.material_problem(mat)
+    assert "lobe" in material_problem(mat)
     assert any("'beckmann' with the nodes backend" in w for w in labels(draw_panels(obj), alert=True))
     with pytest.raises(RuntimeError, match="lobe"):
         bpy.ops.layered_brdf.apply()
-    properties.settings(mat).lobe = "beckmann"
+    settings(mat).lobe = "beckmann"
     assert shader_node(mat).bl_idname == "ShaderNodeGroup"
 
 
@@ -174,16 +180,16 @@ def preset_row(request):
         if backend == "nodes":
             load_preset(obj, name)  # through the operator
         else:
-            properties.apply_to_object(obj, preset(name), backend="osl")
+            apply_to_object(obj, preset(name), backend="osl")
         base_layer = base_node(preset(name))
         if base_layer is not None:
             # The closure form holds the layer, not what the add-on puts under it (a transparent
             # film shows the sphere's far wall through it, a metal base its own reflection): the
             # layer is compared over an empty base.
-            base = M._socket(shader_node(obj.active_material).inputs, "Base Shader")  # group or OSL name
+            base = find_socket(shader_node(obj.active_material).inputs, "Base Shader")  # group or OSL name
             assert [link.from_node.bl_idname for link in base.links] == [base_layer.node_type]
             obj.active_material.node_tree.links.remove(base.links[0])
-    passes = S.render_passes_osl() if backend == "osl" else S.render_passes()
+    passes = render_passes_osl() if backend == "osl" else render_passes()
     return SimpleNamespace(backend=backend, names=names, objs=objs, cam=cam, centers=centers, passes=passes)
 
 
@@ -209,21 +215,21 @@ def test_socket_and_setting_edits_update_the_shader_without_new_groups(monkeypat
     mat = load_preset(obj, "fig4_parallel")
     node = shader_node(mat)
     pointer, key, groups = node.as_pointer(), built_plan(mat), len(bpy.data.node_groups)
-    M.param_socket(node, "d_max")[0].default_value = 90.0
+    param_socket(node, "d_max")[0].default_value = 90.0
     bpy.context.view_layer.update()
     node = shader_node(mat)
     assert node.as_pointer() == pointer and built_plan(mat) == key
     assert len(bpy.data.node_groups) == groups
-    assert properties.params_of(mat).d_max == 90.0
+    assert params_of(mat).d_max == 90.0
     # An enum edit that leaves the plan alone (a tilt of 0 is no tilt) only records the setting.
-    properties.settings(mat).normal_mode = "tilted"
+    settings(mat).normal_mode = "tilted"
     assert shader_node(mat).as_pointer() == pointer and built_plan(mat) == key
     assert mat["layered_brdf_enums"]["normal_mode"] == "tilted"
     assert len(bpy.data.node_groups) == groups
     # Settled: further depsgraph updates apply nothing (the handler's own writes don't feed back).
     calls = []
-    apply = properties.M.apply_layered_material
-    monkeypatch.setattr(properties.M, "apply_layered_material", lambda *a, **k: calls.append(a) or apply(*a, **k))
+    apply = sync.apply_layered_material
+    monkeypatch.setattr(sync, "apply_layered_material", lambda *a, **k: calls.append(a) or apply(*a, **k))
     for _ in range(3):
         bpy.context.view_layer.update()
     assert calls == []
@@ -233,21 +239,21 @@ def test_toggling_an_effect_rebuilds_the_tree():
     obj = plain_object()
     mat = load_preset(obj, "fig4_parallel")
     assert built_plan(mat) == "SDNPXB"
-    M.param_socket(shader_node(mat), "ks")[0].default_value = 0.0
+    param_socket(shader_node(mat), "ks")[0].default_value = 0.0
     bpy.context.view_layer.update()
     assert built_plan(mat) == "sDNPXB"
-    assert shader_node(mat).node_tree.name == node_group_builder.group_name(properties.desired(mat)[2])
-    properties.settings(mat).normal_mode = "tilted"
-    M.param_socket(shader_node(mat), "tilt")[0].default_value = 12.0
+    assert shader_node(mat).node_tree.name == node_group_builder.group_name(desired(mat)[2])
+    settings(mat).normal_mode = "tilted"
+    param_socket(shader_node(mat), "tilt")[0].default_value = 12.0
     bpy.context.view_layer.update()
     assert built_plan(mat) == "sDNTXB"
     node = shader_node(mat)
-    M.param_socket(node, "d_min")[0].default_value = M.input_value(node, "d_max")
+    param_socket(node, "d_min")[0].default_value = input_value(node, "d_max")
     bpy.context.view_layer.update()
     assert built_plan(mat) == "sDCTXB"
     bpy.context.view_layer.update()  # settled: a further update changes nothing
     assert built_plan(mat) == "sDCTXB"
-    assert M.input_value(shader_node(mat), "tilt") == pytest.approx(12.0)
+    assert input_value(shader_node(mat), "tilt") == pytest.approx(12.0)
 
 
 def test_helper_groups_are_hidden_from_the_add_menu():
@@ -255,7 +261,7 @@ def test_helper_groups_are_hidden_from_the_add_menu():
     and the group selector); the material's own group does not."""
     obj = plain_object()
     mat = load_preset(obj, "fig6_medium")
-    helpers = [g for g in bpy.data.node_groups if g.get(M.SUBGROUP_KEY) is not None]
+    helpers = [g for g in bpy.data.node_groups if g.get(SUBGROUP_KEY) is not None]
     assert helpers and all(g.name.startswith(".") for g in helpers)
     assert not shader_node(mat).node_tree.name.startswith(".")
 
@@ -263,7 +269,7 @@ def test_helper_groups_are_hidden_from_the_add_menu():
 def test_menus_show_labels_written_for_people():
     obj = plain_object()
     mat = load_preset(obj, "oil_slick")
-    items = properties.settings(mat).bl_rna.properties["accuracy"].enum_items
+    items = settings(mat).bl_rna.properties["accuracy"].enum_items
     assert items["rgb"].name == "RGB (the paper's 3 wavelengths)" and items["analytic"].name == "Analytic spectral"
     assert ui.preset_title("fig6_medium") == "Fig. 6 medium layer"
 
@@ -274,15 +280,15 @@ def test_a_material_built_before_the_analytic_default_keeps_its_colour_model(tmp
     analytic mode, and keep it whatever the default becomes."""
     obj = plain_object()
     mat = load_preset(obj, "oil_slick")
-    assert properties.settings(mat).accuracy == "analytic" and "A" in built_plan(mat)[6:]
-    assert properties.settings(mat).is_property_set("accuracy")
+    assert settings(mat).accuracy == "analytic" and "A" in built_plan(mat)[6:]
+    assert settings(mat).is_property_set("accuracy")
     assert mat["layered_brdf_enums"]["accuracy"] == "analytic"
     # What a file saved before the change holds: an RGB build, no accuracy written anywhere.
-    properties.settings(mat).accuracy = "rgb"
+    settings(mat).accuracy = "rgb"
     bpy.context.view_layer.update()
     rgb_plan = built_plan(mat)
     assert not rgb_plan.endswith("A")
-    properties.settings(mat).property_unset("accuracy")
+    settings(mat).property_unset("accuracy")
     enums = mat["layered_brdf_enums"].to_dict()
     del enums["accuracy"]
     mat["layered_brdf_enums"] = enums
@@ -290,26 +296,26 @@ def test_a_material_built_before_the_analytic_default_keeps_its_colour_model(tmp
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     bpy.ops.wm.open_mainfile(filepath=str(path))
     mat = bpy.data.materials[name]
-    assert properties.params_of(mat).accuracy == "rgb"
-    M.param_socket(shader_node(mat), "d_max")[0].default_value = 650.0  # an edit: the material is rebuilt if needed
+    assert params_of(mat).accuracy == "rgb"
+    param_socket(shader_node(mat), "d_max")[0].default_value = 650.0  # an edit: the material is rebuilt if needed
     bpy.context.view_layer.update()
-    assert built_plan(mat) == rgb_plan and properties.settings(mat).accuracy == "rgb"
-    assert properties.settings(mat).is_property_set("accuracy")
+    assert built_plan(mat) == rgb_plan and settings(mat).accuracy == "rgb"
+    assert settings(mat).is_property_set("accuracy")
 
 
 def test_animated_driven_or_linked_sockets_keep_their_effects():
     obj = plain_object()
     mat = load_preset(obj, "fig4_parallel")
     node = shader_node(mat)
-    ks = M.param_socket(node, "ks")[0]
+    ks = param_socket(node, "ks")[0]
     ks.default_value = 0.0
     ks.keyframe_insert("default_value", frame=1)
     ks.default_value = 1.0
     ks.keyframe_insert("default_value", frame=10)
-    M.param_socket(node, "bump_strength")[0].driver_add("default_value")
+    param_socket(node, "bump_strength")[0].driver_add("default_value")
     value = mat.node_tree.nodes.new("ShaderNodeValue")
-    mat.node_tree.links.new(value.outputs[0], M.param_socket(node, "kd")[0])
-    assert M.animated_parameters(mat) == {"ks", "bump_strength", "kd"}
+    mat.node_tree.links.new(value.outputs[0], param_socket(node, "kd")[0])
+    assert animated_parameters(mat) == {"ks", "bump_strength", "kd"}
     p = preset("fig4_parallel").replace(ks=0.0, kd=0.0, tilt=0.0, normal_mode="tilted")
     assert plan_effects(p, set()).key == "sdNPXB"
     assert plan_effects(p, {"ks", "kd"}).key == "SDNPXB"
@@ -330,7 +336,7 @@ def test_keyframed_thickness_renders_each_frame_like_the_closure_form():
     frames = {1: 120.0, 2: 260.0}
     for frame, d in frames.items():
         for name in ("d_min", "d_max"):
-            sock = M.param_socket(node, name)[0]
+            sock = param_socket(node, name)[0]
             sock.default_value = d
             sock.keyframe_insert("default_value", frame=frame)
     scene = bpy.context.scene
@@ -344,7 +350,7 @@ def test_keyframed_thickness_renders_each_frame_like_the_closure_form():
         scene.frame_set(frame)
         bpy.context.view_layer.update()
         assert built_plan(mat) == key and shader_node(mat).as_pointer() == pointer
-        passes = S.render_passes()
+        passes = render_passes()
         params = preset("fig4_parallel").replace(d_min=d, d_max=d)
         expected, geo = render_spheres([params], cam, SUN, centers, shading=closure_shading)
         assert_matches(passes.beauty, expected, geo, 0, f"frame {frame}")
@@ -358,14 +364,14 @@ def test_keyframed_thickness_renders_each_frame_like_the_closure_form():
 def test_saved_file_renders_the_same_without_the_addon(tmp_path):
     [obj], _, _ = spheres()
     load_preset(obj, "oil_slick")
-    before = S.render_passes().beauty
+    before = render_passes().beauty
     path = tmp_path / "layered.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     layered_brdf_addon.unregister()
     try:
         bpy.ops.wm.open_mainfile(filepath=str(path))
-        assert not hasattr(bpy.types.Material, properties.SETTINGS)
-        after = S.render_passes().beauty
+        assert not hasattr(bpy.types.Material, SETTINGS)
+        after = render_passes().beauty
     finally:
         layered_brdf_addon.register()
     assert np.all(np.isfinite(before)) and before.max() > 0.0
@@ -420,12 +426,12 @@ def test_a_linked_material_is_left_untouched_and_the_panel_says_why(tmp_path):
 def test_user_presets_save_reuse_in_another_file_and_delete(user_dir):
     obj = plain_object()
     mat = load_preset(obj, "anodised_titanium")
-    M.param_socket(shader_node(mat), "d_max")[0].default_value = 95.0
+    param_socket(shader_node(mat), "d_max")[0].default_value = 95.0
     bpy.ops.layered_brdf.save_preset(name="Blue titanium")
     path = user_dir / "Blue titanium.json"
     data = json.loads(path.read_text())
     assert data["params"]["d_max"] == pytest.approx(95.0) and data["name"] == "Blue titanium"
-    assert properties.settings(mat).preset == "user:Blue titanium"
+    assert settings(mat).preset == "user:Blue titanium"
     saved = socket_values(mat)
     obj = plain_object()  # another file
     mat = load_preset(obj, "user:Blue titanium")
@@ -491,7 +497,7 @@ def test_eevee_links_the_largest_accuracy_mode(tmp_path):
     "shader failed" pixels, finite light, and its highlight where Cycles has it."""
     cycles, eevee, seconds = eevee_check(tmp_path, "spectral32")
     print(f"EEVEE render, spectral 32: {seconds:.1f} s")
-    assert not S.shader_failed(eevee).any()
+    assert not shader_failed(eevee).any()
     assert_highlights_meet(cycles, eevee)
 
 
@@ -506,8 +512,8 @@ def test_a_redraw_of_the_material_panel_reads_the_animation_once(monkeypatch):
     obj = plain_object()
     load_preset(obj, "beetle_shell")
     walks = []
-    real = M.animated_parameters
-    monkeypatch.setattr(M, "animated_parameters", lambda mat: walks.append(mat) or real(mat))
+    real = sync.animated_parameters
+    monkeypatch.setattr(sync, "animated_parameters", lambda mat: walks.append(mat) or real(mat))
     log = []
     ui.LAYERED_BRDF_PT_material.draw(SimpleNamespace(layout=Layout(log)), SimpleNamespace(object=obj,
                                                                                           scene=bpy.context.scene))

@@ -2,8 +2,8 @@
 
 A look is a material carrying a preset's values (its node group embedded, as in any
 material), marked as an asset with a name for people (``Anodised titanium``), a
-description, the author, tags, a catalog (:data:`CATALOGS`, written to the library's
-``blender_assets.cats.txt`` by :mod:`.asset_library`) and a preview rendered on the
+description, the author, tags, a catalog (:data:`~.catalogs.CATALOGS`, written to the library's
+``blender_assets.cats.txt`` by :mod:`.looks_library`) and a preview rendered on the
 look-development shader ball (:mod:`.lookdev`).  Blender renders no previews in
 background mode, so the preview is a small Cycles render whose pixels are written into
 the material's preview image.
@@ -16,19 +16,22 @@ data-block alone.
 from __future__ import annotations
 
 import os
-import uuid
-from dataclasses import dataclass
+import time
 
 import bpy
+import numpy as np
 from bpy.app.handlers import persistent
 
+from ..backends import node_group as node_group_builder
 from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset, preset_label
-from ..backends import node_group as node_group_builder
-from . import material as M
-from . import tempdirs, user_presets
+from . import lookdev, tempdirs, user_presets
+from .catalogs import CATALOGS, ROOT_CATALOG
+from .material_values import params_of, settings
+from .own_nodes import shader_node
 from .scene import render_to_file
+from .stored_keys import LEGACY_PREVIEW_KEY, MATERIAL_KEY, SUBGROUP_KEY
 
 AUTHOR = "Layered BRDF add-on (Granier & Heidrich 2003 model)"
 LICENSE = "GPL-3.0-or-later"  # the add-on's licence and maintainer (blender_manifest.toml)
@@ -40,39 +43,11 @@ PREVIEW_SIZE_RANGE = (8, 512)
 PREVIEW_SAMPLES_RANGE = (1, 4096)
 
 
-@dataclass(frozen=True)
-class Catalog:
-    """One asset catalog: a stable UUID, its path in the Asset Browser and Blender's simple name."""
-
-    uuid: str
-    path: str
-
-    @property
-    def simple_name(self) -> str:
-        return self.path.replace("/", "-")
-
-    def line(self) -> str:
-        """The catalog as a line of ``blender_assets.cats.txt``."""
-        return f"{self.uuid}:{self.path}:{self.simple_name}"
-
-
-def _catalog(path: str) -> Catalog:
-    # Derived from the path, so every library (and every version of the add-on) uses the same UUIDs.
-    return Catalog(str(uuid.uuid5(uuid.NAMESPACE_URL, "https://layered-brdf/asset-catalog/" + path)), path)
-
-
-ROOT_CATALOG = _catalog("Layered BRDF")
-CATALOGS = {
-    "artist": _catalog("Layered BRDF/Artist looks"),
-    "paper": _catalog("Layered BRDF/Paper figures"),
-    "user": _catalog("Layered BRDF/User presets"),
-}
 KIND_TAGS = {"artist": "artist look", "paper": "paper figure", "user": "user preset"}
 
 # What versions before looks put on the add-on's node groups (taken off by release_node_groups).
 LEGACY_CATALOG_ID = "4b0f3f52-5d0c-4c55-9d2e-6b8d1c1f7a21"
 LEGACY_AUTHOR = "layered-brdf"
-LEGACY_PREVIEW_KEY = "layered_brdf_preview"
 
 _queued: set[str] = set()
 # The timer functions this module registered, kept across importlib.reload (which re-runs this
@@ -131,19 +106,11 @@ def is_look(mat) -> bool:
     return data is not None and data.catalog_id in {c.uuid for c in CATALOGS.values()} | {ROOT_CATALOG.uuid}
 
 
-def _params_of(mat) -> LayeredParams:
-    from . import properties
-
-    return properties.params_of(mat)
-
-
 def identifier_of(mat) -> str | None:
     """The preset ``mat`` shows: its last loaded preset while it still has that preset's values,
     else a built-in preset with its values, else None."""
-    from . import properties
-
-    values = _params_of(mat)
-    current = properties.settings(mat).preset
+    values = params_of(mat)
+    current = settings(mat).preset
     if current:
         try:
             kind_of(current)
@@ -172,14 +139,14 @@ def mark_look(mat, identifier: str | None = None):
     ``identifier`` is the preset the material carries (the catalog follows it); by default the
     material's own preset while it still has that preset's values (:func:`identifier_of`), else
     the *User presets* catalog.  Idempotent: the tags are replaced, the preview is kept."""
-    if M.shader_node(mat) is None or not mat.get(M.MATERIAL_KEY):
+    if shader_node(mat) is None or not mat.get(MATERIAL_KEY):
         raise ParameterError("material", mat.name, "a layered material (apply the Layered BRDF first)")
     if mat.library is not None:
         raise ParameterError("material", mat.name, f"a local material (it is linked from {mat.library.filepath})")
     if identifier is None:
         identifier = identifier_of(mat)
     kind = kind_of(identifier) if identifier is not None else "user"
-    params = _params_of(mat)
+    params = params_of(mat)
     if mat.asset_data is None:
         mat.asset_mark()
     data = mat.asset_data
@@ -226,12 +193,6 @@ def render_previews(materials, size: int | None = None, samples: int | None = No
     its process died).  With an interrupt ``guard``
     (:class:`~layered_brdf_addon.cli.staging.InterruptGuard`, the command line's), a signal
     stops the renders at once and the folder is removed."""
-    import time
-
-    import numpy as np
-
-    from . import lookdev
-
     size, samples = check_preview_options(PREVIEW_SIZE if size is None else size,
                                           PREVIEW_SAMPLES if samples is None else samples)
     materials = list(materials)
@@ -253,7 +214,7 @@ def render_previews(materials, size: int | None = None, samples: int | None = No
                 if guard is not None:
                     guard.check()
                 slot.material = mat
-                node = M.shader_node(mat)
+                node = shader_node(mat)
                 # The OSL backend's materials need Cycles' OSL shading (on the CPU, as the scene renders).
                 scene.cycles.shading_system = node is not None and node.bl_idname == "ShaderNodeScript"
                 t0 = time.perf_counter()
@@ -333,7 +294,7 @@ def cancel_queued() -> None:
 # --- the add-on's node groups are not assets -----------------------------------------------------
 def group_of(mat):
     """The node group behind ``mat``'s layered shader (None with the OSL backend)."""
-    node = M.shader_node(mat)
+    node = shader_node(mat)
     if node is None or node.bl_idname != "ShaderNodeGroup":
         return None
     return node.node_tree
@@ -341,7 +302,7 @@ def group_of(mat):
 
 def _own_group(group) -> bool:
     return group.library is None and (group.get(node_group_builder.STAMP_KEY) is not None
-                                      or group.get(M.SUBGROUP_KEY) is not None)
+                                      or group.get(SUBGROUP_KEY) is not None)
 
 
 def _legacy_mark(group) -> bool:

@@ -23,11 +23,22 @@ import bpy
 from bpy.props import EnumProperty, IntProperty, StringProperty
 from bpy.types import Operator
 
+from ..fit import solve
+from ..fit.environment import DEFAULT_HDRIS
+from ..fit.free import default_vary
+from ..fit.solve import FitCancelled
+from ..fit.targets import SphereTarget, TargetError
 from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset_label
-from . import material as M
-from . import properties, user_presets
+from . import sync, user_presets
+from .animation import animated_parameters
+from .lookdev import hdri_path
+from .material_values import is_layered, layered_material_of, params_of, settings
+from .own_nodes import shader_node
+from .principled_target import principled_materials, principled_views_of, start_for
+from .sidecar_views import sidecar_views
+from .targets import object_problem, takes_layered_material
 
 FIT_MODULES = (("scipy", "SciPy"), ("colour", "colour-science"))
 NEEDS_MODULES = "Fitting needs SciPy and colour-science in Blender's Python"
@@ -56,8 +67,6 @@ def fitting_unavailable() -> str | None:
 
 def sphere_target(target_views):
     """The views as a :class:`~..fit.targets.SphereTarget` (TargetError says why they cannot be one)."""
-    from ..fit.targets import SphereTarget
-
     return SphereTarget(list(target_views))
 
 
@@ -66,9 +75,6 @@ def expected_evaluations(start: LayeredParams, starts: int = 3, steps_per_start:
     """About how many model evaluations a fit makes at most: the thickness scan, then per start
     ``steps_per_start`` steps of one evaluation per free parameter and one more (for the
     progress bar; a fit that converges early ends sooner)."""
-    from ..fit import solve
-    from ..fit.free import default_vary
-
     free = len(default_vary(start) if vary is None else vary)
     scan = solve.THICKNESS_SCAN_STEPS * (len(getattr(solve, "SCAN_HALF_WIDTHS", ())) + 1)
     return scan + (starts + 1) * steps_per_start * (free + 1)
@@ -80,41 +86,41 @@ def layered_target(target):
     """``target`` checked as what a fit may change: a local layered material, or an object that
     takes one (the slot gets the layered material as *Apply* gives it); ParameterError else."""
     if isinstance(target, bpy.types.Object):
-        problem = M.object_problem(target)
+        problem = object_problem(target)
         if problem is not None:
             raise ParameterError("object", target.name, problem)
         return target
     if isinstance(target, bpy.types.Material):
-        if not properties.is_layered(target):
+        if not is_layered(target):
             raise ParameterError("material", target.name, "a layered material (or the object to give one)")
-        properties.desired(target)  # local, and a shader node the values can go into
+        sync.desired(target)  # local, and a shader node the values can go into
         return target
     raise ParameterError("material", repr(target), "a layered material or an object")
 
 
 def apply_fitted(target, params: LayeredParams):
     """Give ``target`` (see :func:`layered_target`) the fitted ``params`` as loading a preset
-    does (:func:`.properties.apply_to_object`): settings adopted and written, the backend
+    does (:func:`.sync.apply_to_object`): settings adopted and written, the backend
     kept, the effects of animated sockets kept, a look's preview refreshed.  Returns the material."""
     target = layered_target(target)
     if isinstance(target, bpy.types.Object):
-        mat = properties.apply_to_object(target, params)
+        mat = sync.apply_to_object(target, params)
     else:
-        properties.adopt(target)
-        backend = properties.settings(target).backend
+        sync.adopt(target)
+        backend = settings(target).backend
         params = params.validate()
-        properties.check_backend(params, backend)
-        plan = plan_effects(params, M.animated_parameters(target))
-        mat = properties._apply(target, params, backend, plan, preview=True)
-    properties.settings(mat).preset = ""  # fitted values are no preset's
+        sync.check_backend(params, backend)
+        plan = plan_effects(params, animated_parameters(target))
+        mat = sync.apply(target, params, backend, plan, preview=True)
+    settings(mat).preset = ""  # fitted values are no preset's
     return mat
 
 
 def start_of(target) -> LayeredParams | None:
     """The values of ``target``'s layered material (an object's active one), or None."""
-    mat = properties.layered_material_of(target) if isinstance(target, bpy.types.Object) else target
-    if properties.is_layered(mat) and M.shader_node(mat) is not None:
-        return properties.params_of(mat)
+    mat = layered_material_of(target) if isinstance(target, bpy.types.Object) else target
+    if is_layered(mat) and shader_node(mat) is not None:
+        return params_of(mat)
     return None
 
 
@@ -124,8 +130,6 @@ def run_fit(target_views, start: LayeredParams, *, progress: Callable[[int], Non
     """Fit ``start`` to the views (``options``: :func:`..fit.solve.fit`'s, over
     :data:`FIT_OPTIONS`); the :class:`~..fit.solve.FitResult`.  Touches no Blender data: it
     may run in any thread."""
-    from ..fit import solve
-
     return solve.fit(sphere_target(target_views), start.validate(), progress=progress, should_stop=should_stop,
                      **{**FIT_OPTIONS, **options})
 
@@ -207,8 +211,6 @@ _enum_cache: dict[str, list] = {}  # Blender keeps no reference to a dynamic enu
 
 
 def _principled_items(self, context):
-    from .principled_target import principled_materials
-
     items = [(m.name, m.name, f"Render '{m.name}' on the reference sphere and fit to it", "MATERIAL", k)
              for k, m in enumerate(principled_materials())]
     if not items:
@@ -220,7 +222,7 @@ def _principled_items(self, context):
 def _start_items(self, context):
     items = []
     obj = getattr(context, "object", None)
-    if obj is not None and properties.layered_material_of(obj) is not None:
+    if obj is not None and layered_material_of(obj) is not None:
         items.append((CURRENT, "Current Values", "Start from the layered material's own values"))
     names = list(ARTIST_PRESETS) + list(PAPER_PRESETS)
     items += [(n, preset_label(n), f"Start from the preset '{preset_label(n)}'") for n in names]
@@ -260,7 +262,7 @@ material of this file (Esc cancels)"""
 
     @classmethod
     def poll(cls, context):
-        if not M.takes_layered_material(getattr(context, "object", None)):
+        if not takes_layered_material(getattr(context, "object", None)):
             return False
         reason = fitting_unavailable()
         if reason is not None:
@@ -288,17 +290,10 @@ material of this file (Esc cancels)"""
 
     # --- what to fit, from what -------------------------------------------
     def _target_views(self) -> list:
-        from .principled_target import principled_views_of
-
         if self.source == "RENDER":
-            from .sidecar_views import sidecar_views
-
             if not self.filepath:
                 raise ParameterError("filepath", self.filepath, "the path of a render's sidecar .json")
             return sidecar_views(bpy.path.abspath(self.filepath), sphere=self.sphere)
-        from ..fit.environment import DEFAULT_HDRIS
-        from .lookdev import hdri_path
-
         return principled_views_of(self._principled_material(), hdris=[hdri_path(h) for h in DEFAULT_HDRIS])
 
     def _principled_material(self):
@@ -310,8 +305,6 @@ material of this file (Esc cancels)"""
         return mat
 
     def _start_params(self, obj) -> LayeredParams:
-        from .principled_target import start_for
-
         if self.start == CURRENT:
             params = start_of(obj)
             if params is None:
@@ -323,7 +316,7 @@ material of this file (Esc cancels)"""
     def _prepare(self, context):
         """(target, views, start): the material (or the object) to fit, the rendered target, the start."""
         obj = context.object
-        mat = properties.layered_material_of(obj)
+        mat = layered_material_of(obj)
         target = layered_target(mat if mat is not None else obj)
         start = self._start_params(obj)
         views = self._target_views()
@@ -339,8 +332,6 @@ material of this file (Esc cancels)"""
         if reason is not None:
             self.report({"ERROR"}, reason)
             return {"CANCELLED"}
-        from ..fit.targets import TargetError
-
         try:
             target, views, start = self._prepare(context)
         except (ParameterError, OSError) as e:
@@ -411,9 +402,6 @@ material of this file (Esc cancels)"""
         self._end_progress(context)
 
     def _finish(self, context):
-        from ..fit.solve import FitCancelled
-        from ..fit.targets import TargetError
-
         job = self._job
         if isinstance(job.error, FitCancelled):
             self.report({"WARNING"}, f"Fit cancelled: '{self._target_name}' is unchanged")

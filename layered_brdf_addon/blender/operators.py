@@ -1,5 +1,5 @@
-"""Operators: thin wrappers over the functions of ``properties``, ``user_presets``, ``assets`` and
-``asset_library``.
+"""Operators: thin wrappers over the functions of ``sync``, ``user_presets``, ``assets`` and
+``looks_library``.
 
 A ParameterError (an invalid value, a linked material, a bad preset file) is reported
 as an error and the operator is cancelled with nothing changed.
@@ -10,19 +10,22 @@ from bpy.props import BoolProperty, IntProperty, StringProperty
 from bpy.types import Operator
 
 from ..model.params import ParameterError
-from . import asset_library, assets, osl, properties, user_presets
-from . import material as M
+from . import assets, looks_library, osl, user_presets
+from .material_values import layered_material_of, params_of, settings
+from .properties import param_tooltip
+from .sync import apply_to_object, desired, remove_from_object, upgrade_all
+from .targets import takes_layered_material
 
 
 def _object_with_materials(context):
     """The active object when it is of a type that renders the layered material (not an Empty, a
     light, a Grease Pencil object...), else None."""
     obj = context.object
-    return obj if M.takes_layered_material(obj) else None
+    return obj if takes_layered_material(obj) else None
 
 
 def _layered_material(context):
-    return properties.layered_material_of(_object_with_materials(context))
+    return layered_material_of(_object_with_materials(context))
 
 
 class _Reporting:
@@ -51,7 +54,7 @@ class LAYERED_BRDF_OT_apply(_Reporting, Operator):
         return _object_with_materials(context) is not None
 
     def run(self, context):
-        mat = properties.apply_to_object(context.object)
+        mat = apply_to_object(context.object)
         return f"Layered BRDF applied: material '{mat.name}'"
 
 
@@ -67,7 +70,7 @@ class LAYERED_BRDF_OT_remove(_Reporting, Operator):
         return _layered_material(context) is not None
 
     def run(self, context):
-        if not properties.remove_from_object(context.object):
+        if not remove_from_object(context.object):
             raise ParameterError("object", context.object.name, "an object with a layered material")
         return "Layered BRDF removed"
 
@@ -91,8 +94,8 @@ class LAYERED_BRDF_OT_load_preset(_Reporting, Operator):
 
     def run(self, context):
         params = user_presets.preset_params(self.preset)
-        mat = properties.apply_to_object(context.object, params)
-        properties.settings(mat).preset = self.preset
+        mat = apply_to_object(context.object, params)
+        settings(mat).preset = self.preset
         return f"Preset '{self.preset}' loaded into '{mat.name}'"
 
 
@@ -110,7 +113,7 @@ class LAYERED_BRDF_OT_save_preset(_Reporting, Operator):
         return _layered_material(context) is not None
 
     def invoke(self, context, event):
-        current = properties.settings(_layered_material(context)).preset
+        current = settings(_layered_material(context)).preset
         if not self.name:
             self.name = current[len(user_presets.USER_PREFIX):] if current.startswith(user_presets.USER_PREFIX) \
                 else "My preset"
@@ -118,8 +121,8 @@ class LAYERED_BRDF_OT_save_preset(_Reporting, Operator):
 
     def run(self, context):
         mat = _layered_material(context)
-        path = user_presets.save_user_preset(self.name, properties.params_of(mat))
-        properties.settings(mat).preset = user_presets.USER_PREFIX + path.stem
+        path = user_presets.save_user_preset(self.name, params_of(mat))
+        settings(mat).preset = user_presets.USER_PREFIX + path.stem
         return f"Preset '{path.stem}' saved to {path}"
 
 
@@ -154,7 +157,7 @@ class LAYERED_BRDF_OT_mark_asset(_Reporting, Operator):
 
     def run(self, context):
         mat = _layered_material(context)
-        properties.desired(mat)  # a material that can be built (else ParameterError, nothing changes)
+        desired(mat)  # a material that can be built (else ParameterError, nothing changes)
         assets.publish(mat, preview=True)
         catalog = next(c.path for c in assets.CATALOGS.values() if c.uuid == mat.asset_data.catalog_id)
         return f"Material '{mat.name}' is an asset in the catalog '{catalog}'"
@@ -190,18 +193,18 @@ for the Asset Browser; optionally add the folder to Preferences > File Paths > A
     def run(self, context):
         if not self.directory:
             raise ParameterError("directory", self.directory, "a folder path")
-        presets = asset_library.default_presets(include_user=self.include_user_presets)
+        presets = looks_library.default_presets(include_user=self.include_user_presets)
         wm = context.window_manager
         wm.progress_begin(0, 1)
         try:
-            result = asset_library.write_asset_library(
+            result = looks_library.write_library(
                 self.directory, presets, preview_size=self.preview_size, samples=self.samples,
                 progress=lambda done, total: wm.progress_update(done / total))
         finally:
             wm.progress_end()
         message = f"{len(result.assets)} looks written to {result.blend}"
         if self.register_library:
-            lib, added = asset_library.register_library(result.directory)
+            lib, added = looks_library.register_library(result.directory)
             message += f"; asset library '{lib.name}' " + ("added to the Preferences" if added else "already listed")
         return message
 
@@ -214,7 +217,7 @@ class LAYERED_BRDF_OT_upgrade(_Reporting, Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def run(self, context):
-        done = properties.upgrade_all()
+        done = upgrade_all()
         return f"Updated {len(done)} material(s)" + (": " + ", ".join(done) if done else "")
 
 
@@ -249,8 +252,8 @@ class LAYERED_BRDF_OT_param_info(Operator):
 
     @classmethod
     def description(cls, context, props):
-        return properties.param_tooltip(props.param)
+        return param_tooltip(props.param)
 
     def execute(self, context):
-        self.report({"INFO"}, properties.param_tooltip(self.param))
+        self.report({"INFO"}, param_tooltip(self.param))
         return {"FINISHED"}

@@ -27,7 +27,7 @@ from ..fit.environment import Environment
 from ..fit.targets import SphereView
 from ..model.params import LayeredParams, ParameterError
 from ..model.sphere import Sun
-from . import scene as S
+from .scene import SceneSpec, build_scene, camera_for, render_to_file, set_hdri_environment
 from . import tempdirs
 
 DEFAULT_SIZE = 96
@@ -181,9 +181,9 @@ def _reference_scene(material, size: int, samples: int, sun: Sun):
     """A new scene holding the reference sphere (``material`` on it), camera and ``sun``,
     writing a linear float EXR of the Combined pass."""
     scene = bpy.data.scenes.new("Layered BRDF fit target")
-    spec = S.SceneSpec(camera=S.camera_for(1, size), sun=sun, samples=samples, threads=os.cpu_count() or 2)
+    spec = SceneSpec(camera=camera_for(1, size), sun=sun, samples=samples, threads=os.cpu_count() or 2)
     with _reference_world_free():
-        [sphere] = S.build_scene(spec, scene)
+        [sphere] = build_scene(spec, scene)
     sphere.data.materials.append(material)
     s = scene.render.image_settings
     s.media_type = "IMAGE"
@@ -210,7 +210,7 @@ def read_float_image(path) -> np.ndarray:
 
 def _render_view(scene, spec, folder: Path, k: int, environment: Environment | None = None) -> SphereView:
     path = folder / f"target{k}.exr"
-    S.render_to_file(path, scene)
+    render_to_file(path, scene)
     if environment is not None:
         return SphereView(read_float_image(path), spec.camera, None, spec.centers, environment=environment)
     return SphereView(read_float_image(path), spec.camera, spec.sun, spec.centers)
@@ -258,7 +258,7 @@ def principled_views_of(material, *, size: int = DEFAULT_SIZE, samples: int = DE
             views.append(_render_view(scene, spec, folder, k))
         for k, (path, environment) in enumerate(environments, start=len(suns)):
             scene, spec = _reference_scene(material, size, hdri_samples, Sun(strength=0.0))
-            S.set_hdri_environment(path, environment.strength, scene)
+            set_hdri_environment(path, environment.strength, scene)
             views.append(_render_view(scene, spec, folder, k, environment))
     return views
 

@@ -1,10 +1,14 @@
-"""Registering the add-on: one list of classes, one property on materials, three handlers."""
+"""Registering the add-on: one list of classes, one property on materials, three handlers.
+
+Called only from the package's ``register()`` and ``unregister()`` (the add-on's entry point).
+"""
 from __future__ import annotations
 
 import bpy
 from bpy.props import PointerProperty
 
-from . import assets, fit_operator, operators, properties, ui
+from . import assets, fit_operator, operators, properties, sync, ui
+from .stored_keys import SETTINGS
 
 CLASSES = (
     properties.LayeredBRDFSettings,
@@ -28,8 +32,8 @@ CLASSES = (
 
 def _handlers():
     return (
-        (bpy.app.handlers.depsgraph_update_post, properties.on_depsgraph_update),
-        (bpy.app.handlers.load_post, properties.on_load_post),
+        (bpy.app.handlers.depsgraph_update_post, sync.on_depsgraph_update),
+        (bpy.app.handlers.load_post, sync.on_load_post),
         (bpy.app.handlers.version_update, assets.on_version_update),  # older versions' asset marks off
     )
 
@@ -67,6 +71,11 @@ def _registered_versions(cls, everyone: bool = False) -> list:
             and (everyone or _ours(c))]
 
 
+# The module holding another copy's material handlers: .blender.sync, or .blender.properties in
+# versions before the sync module.
+_SYNC_MODULES = (".blender.sync", ".blender.properties")
+
+
 def _other_copy() -> str | None:
     """The package of another copy of the add-on that is registered now, or None."""
     for cls in CLASSES:
@@ -76,7 +85,7 @@ def _other_copy() -> str | None:
     for handlers, fn in _handlers():
         for f in handlers:
             if getattr(f, "__qualname__", None) == fn.__qualname__ and not _ours(f) and \
-                    (getattr(f, "__module__", None) or "").endswith(".blender.properties"):
+                    (getattr(f, "__module__", None) or "").endswith(_SYNC_MODULES):
                 return f.__module__.rsplit(".blender.", 1)[0]
     return None
 
@@ -106,7 +115,7 @@ def register() -> None:
         unregister()
     for cls in CLASSES:
         bpy.utils.register_class(cls)
-    setattr(bpy.types.Material, properties.SETTINGS, PointerProperty(
+    setattr(bpy.types.Material, SETTINGS, PointerProperty(
         type=properties.LayeredBRDFSettings, name="Layered BRDF",
         description="Settings of the layered material (enums, backend, preset)"))
     for handlers, fn in _handlers():
@@ -120,8 +129,8 @@ def unregister() -> None:
         for f in [f for f in handlers if _same_function(f, fn)]:
             handlers.remove(f)
     assets.cancel_queued()
-    if _other_copy() is None and hasattr(bpy.types.Material, properties.SETTINGS):
-        delattr(bpy.types.Material, properties.SETTINGS)
+    if _other_copy() is None and hasattr(bpy.types.Material, SETTINGS):
+        delattr(bpy.types.Material, SETTINGS)
     for cls in reversed(CLASSES):
         for registered in _registered_versions(cls):
             bpy.utils.unregister_class(registered)

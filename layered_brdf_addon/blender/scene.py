@@ -19,7 +19,8 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 from ..model.sphere import OrthoCamera, Sun
-from .material import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL
+from .own_nodes import shader_node
+from .stored_keys import AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL
 
 SPHERE_SEGMENTS = 256
 SPHERE_RINGS = 128
@@ -351,8 +352,6 @@ def render_passes(scene=None, keep: str | os.PathLike | None = None) -> Passes:
 
 def _scripted_materials(scene):
     """The layered materials of ``scene`` that run the OSL shader (found by the add-on's stamp)."""
-    from .material import shader_node
-
     mats = set()
     for obj in scene.objects:
         for slot in getattr(obj, "material_slots", []):
@@ -371,8 +370,6 @@ def render_passes_osl(scene=None, keep: str | os.PathLike | None = None) -> Pass
     rendered in extra passes that route the script's outputs into an emission shader
     (normals encoded as ``0.5 + 0.5 n``); the materials are restored afterwards.
     """
-    from .material import shader_node
-
     scene = scene or bpy.context.scene
     beauty = render_passes(scene, keep)
     extra = {}

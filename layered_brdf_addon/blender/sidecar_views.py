@@ -17,6 +17,9 @@ from typing import Callable
 
 import numpy as np
 
+from ..cli.codecs import exr_beauty
+from ..cli.sidecar import read_sidecar, scene_from_sidecar
+from ..cli.staging import OutputPaths, output_stem
 from ..fit.targets import SphereView, TargetError
 
 
@@ -26,8 +29,6 @@ def read_exr_beauty(path: str | os.PathLike) -> np.ndarray:
         import OpenEXR  # noqa: F401
     except ImportError:
         return _beauty_with_openimageio(path)
-    from ..cli.codecs import exr_beauty
-
     return exr_beauty(path)[0]
 
 
@@ -75,9 +76,6 @@ def sidecar_views(path: str | os.PathLike, *, sphere: int = 0,
     A file that is not the sidecar of a reference-sphere render or gallery, a missing EXR or
     sphere is a :class:`~..fit.targets.TargetError` saying which.
     """
-    from ..cli.sidecar import read_sidecar, scene_from_sidecar
-    from ..cli.staging import OutputPaths, output_stem
-
     p = Path(path)
     json_path = p if p.suffix.lower() == ".json" else OutputPaths(output_stem(p)).json
     try:

@@ -9,8 +9,14 @@ from bpy.types import Menu, Panel
 
 from ..model.params import PARAM_SPECS
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset_label
-from . import material as M
-from . import assets, osl, properties, user_presets
+from . import assets, osl, user_presets
+from .material_values import is_layered, layered_material_of, settings
+from .own_nodes import shader_node
+from .properties import param_label
+from .slots import displaced_material
+from .sockets import param_socket
+from .sync import desired_or_problem
+from .targets import object_problem, takes_layered_material
 
 MAIN_PANEL = "LAYERED_BRDF_PT_material"
 
@@ -24,9 +30,9 @@ def preset_title(identifier: str) -> str:
 def draw_param(layout, mat, node, spec) -> None:
     """One parameter: its socket (floats) or its setting (enums), labelled with the unit, and a tooltip."""
     row = layout.row(align=True)
-    text = properties.param_label(spec)
+    text = param_label(spec)
     if spec.socket:
-        sock, channel = M.param_socket(node, spec.name)
+        sock, channel = param_socket(node, spec.name)
         if sock is None:  # a socket deleted from the node group, or a node older than the parameter
             row.label(text=f"{text}: not on the node (Rebuild adds it)", icon="ERROR")
             return
@@ -39,7 +45,7 @@ def draw_param(layout, mat, node, spec) -> None:
         else:
             row.prop(sock, "default_value", text=text)
     else:
-        row.prop(properties.settings(mat), spec.name, text=text)
+        row.prop(settings(mat), spec.name, text=text)
     row.operator("layered_brdf.param_info", text="", icon="QUESTION", emboss=False).param = spec.name
 
 
@@ -54,15 +60,15 @@ def draw_material(layout, context) -> None:
     obj = context.object
     mat = obj.active_material
     if obj.library is not None:
-        _alert(layout, M.object_problem(obj), icon="LIBRARY_DATA_DIRECT")
+        _alert(layout, object_problem(obj), icon="LIBRARY_DATA_DIRECT")
         return
     if mat is not None and mat.library is not None:
         _alert(layout, f"'{mat.name}' is linked from {mat.library.filepath}: make it local to edit it",
                icon="LIBRARY_DATA_DIRECT")
-        if properties.is_layered(mat):
+        if is_layered(mat):
             return
-    if not properties.is_layered(mat):
-        problem = M.object_problem(obj)  # a slot of linked data: applying would not be saved
+    if not is_layered(mat):
+        problem = object_problem(obj)  # a slot of linked data: applying would not be saved
         if problem:
             _alert(layout, problem, icon="LIBRARY_DATA_DIRECT")
         layout.operator("layered_brdf.apply", icon="SHADING_RENDERED")
@@ -70,7 +76,7 @@ def draw_material(layout, context) -> None:
         draw_asset_row(layout, None)
         draw_fit_row(layout)
         return
-    st = properties.settings(mat)
+    st = settings(mat)
     row = layout.row(align=True)
     row.menu(LAYERED_BRDF_MT_presets.__name__, text=preset_title(st.preset) if st.preset else "Presets",
              icon="PRESET")
@@ -82,7 +88,7 @@ def draw_material(layout, context) -> None:
         if not ok:
             col = _alert(layout, f"OSL will not run: {reason}")
             col.operator("layered_brdf.enable_osl", icon="SETTINGS")
-    wanted, problem = properties.desired_or_problem(mat)
+    wanted, problem = desired_or_problem(mat)
     if problem:
         _alert(layout, problem)
     row = layout.row(align=True)
@@ -90,10 +96,10 @@ def draw_material(layout, context) -> None:
     row.operator("layered_brdf.remove", text="", icon="X")
     draw_asset_row(layout, mat)
     draw_fit_row(layout)
-    displaced = M.displaced_material(mat)
+    displaced = displaced_material(mat)
     if displaced is not None:
         layout.label(text=f"Remove puts '{displaced.name}' back in the slot", icon="INFO")
-    if M.shader_node(mat) is None:
+    if shader_node(mat) is None:
         layout.label(text="The material has no Layered BRDF node: Rebuild restores it", icon="INFO")
     elif wanted is not None:
         _, _, plan = wanted
@@ -129,7 +135,7 @@ class LAYERED_BRDF_PT_material(Panel):
 
     @classmethod
     def poll(cls, context):
-        return M.takes_layered_material(context.object)
+        return takes_layered_material(context.object)
 
     def draw(self, context):
         draw_material(self.layout, context)
@@ -145,12 +151,12 @@ class _ParamsPanel(Panel):
     @classmethod
     def poll(cls, context):
         obj = context.object
-        mat = properties.layered_material_of(obj) if M.takes_layered_material(obj) else None
-        return mat is not None and mat.library is None and M.shader_node(mat) is not None
+        mat = layered_material_of(obj) if takes_layered_material(obj) else None
+        return mat is not None and mat.library is None and shader_node(mat) is not None
 
     def draw(self, context):
         mat = context.object.active_material
-        node = M.shader_node(mat)
+        node = shader_node(mat)
         self.layout.use_property_split = False
         for spec in PARAM_SPECS:
             if spec.group == self.group:

@@ -1,0 +1,202 @@
+"""Building the layered material: :func:`apply_layered_material`, the one function the UI, the
+command line and the tests call, and :func:`tree_current`, the one test of whether a material's
+tree is what a build would make.
+
+A material's tree is built for a backend ("nodes": the node group; "osl": the OSL script) and
+an effect plan.  Applying again rebuilds only when that changed (or the tree was damaged);
+otherwise only the parameter values are written into the shader node's sockets.
+"""
+from __future__ import annotations
+
+from ..backends import node_group as node_group_builder
+from ..model import policy
+from ..model.base_layers import base_node
+from ..model.params import LayeredParams, ParameterError, group_socket_name, iter_sockets
+from ..model.plan import EffectPlan
+from ..model.policy import plan_effects
+from . import osl as osl_backend
+from .animation import animated_parameters, restore_animation, stash_animation
+from .migration import claim, legacy_base_links, link_legacy_base, repair
+from .own_nodes import active_output, stamp
+from .slots import material_for
+from .sockets import find_socket, legacy_tint, node_damage, set_inputs
+from .stored_keys import (AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL, BACKEND_KEY, BASE_CHANNELS, BUILD_KEY,
+                          ENUMS_KEY, OWN_PREFIX, ROLE_KEY, SHADER_NODE, TEXT_KEY, settings_record)
+from .targets import params_argument, shown
+from .unused_data import remove_unused_own_data
+
+
+def apply_layered_material(target, params: LayeredParams | None = None, backend: str = "nodes",
+                           plan: EffectPlan | None = None, name: str = "Layered BRDF"):
+    """Give ``target`` (an object, its name, or a material) the layered material.
+
+    ``params``: a LayeredParams, a dict of parameter values (validated like a preset file) or
+    None (the defaults).  A wrong type, an object of a type that renders no surface shader (an
+    Empty, a Grease Pencil object...) or linked data raises ParameterError, with nothing changed.
+    Idempotent: applying again reuses the material and the node group, rebuilds the
+    material's tree only when the backend or the plan of active effects changed, and
+    otherwise only writes the parameter values into the shader's input sockets.
+    ``plan`` defaults to :func:`plan_effects` of ``params`` (``EffectPlan.full()`` gives
+    the always-full shader).  Returns the material.
+    """
+    params = params_argument(params)
+    if plan is not None and not isinstance(plan, EffectPlan):
+        raise ParameterError("plan", shown(plan), "an EffectPlan or None (the plan of the parameters)")
+    if not isinstance(name, str) or not name:
+        raise ParameterError("name", name if isinstance(name, str) else shown(name), "a material name (text)")
+    policy.check_backend(backend, params.lobe)
+    mat = material_for(target, name)
+    plan = plan or plan_effects(params, animated_parameters(mat))
+    if plan.lobe != params.lobe:
+        plan = EffectPlan(**{**plan.to_dict(), "lobe": params.lobe})
+    node, own = claim(mat)
+    if not tree_current(mat, node, backend, plan, params):
+        node = _build_tree(mat, params, backend, plan, node, own)
+        mat[BUILD_KEY] = build_key(backend, plan, params)
+        remove_unused_own_data()
+    repair(mat, node)
+    set_inputs(node, params)
+    _set_base_inputs(node, params)
+    mat[BACKEND_KEY] = backend
+    mat[ENUMS_KEY] = settings_record(params)
+    return mat
+
+
+def build_key(backend: str, plan: EffectPlan, params: LayeredParams) -> str:
+    """What a build records under :data:`~.stored_keys.BUILD_KEY`: backend, plan and base layer."""
+    return f"{backend}:{plan.key}:{params.base_layer}"
+
+
+def tree_current(mat, node, backend: str, plan: EffectPlan, params: LayeredParams, check_sources: bool = True) -> bool:
+    """Whether ``mat``'s tree, with ``node`` its shader node (or None), is what a build for
+    ``backend``, ``plan`` and ``params`` makes: its build record says so, the node has every
+    socket, and it runs this version's node group for ``plan`` or the OSL script (its source
+    compared with the plan's only with ``check_sources``)."""
+    if node is None or mat.get(BUILD_KEY) != build_key(backend, plan, params) or node_damage(node) is not None:
+        return False
+    if backend == "nodes":
+        return node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and \
+            node_group_builder.is_current(node.node_tree, plan)
+    return node.bl_idname == "ShaderNodeScript" and node.script is not None and \
+        (not check_sources or node.script.as_string() == osl_backend.source(plan))
+
+
+def _set_base_inputs(node, params: LayeredParams) -> None:
+    """Write the values of the add-on's base node (a metal's colour and roughness follow the
+    parameters) when the add-on's own base node feeds ``node``'s Base Shader input."""
+    spec = base_node(params)
+    base_in = find_socket(node.inputs, "Base Shader")
+    if spec is None or base_in is None:
+        return
+    for link in base_in.links:
+        base = link.from_node
+        if base.get(ROLE_KEY) == "base" and base.bl_idname == spec.node_type:
+            for name, value in spec.inputs.items():
+                base.inputs[name].default_value = value
+
+
+def _group_lacks_sockets(group) -> bool:
+    """Whether the add-on's node group lacks a socket it builds for a parameter, or its BSDF output."""
+    items = [i for i in group.interface.items_tree if i.item_type == "SOCKET"]
+    inputs = {i.name for i in items if i.in_out == "INPUT"}
+    outputs = {i.name for i in items if i.in_out == "OUTPUT"}
+    return "BSDF" not in outputs or any(group_socket_name(s) not in inputs for s in iter_sockets())
+
+
+def _group_for(plan: EffectPlan):
+    """The node group for ``plan`` (:func:`node_group_builder.ensure_group`). A group stamped as
+    current that lacks a socket (the artist deleted one) is marked stale first, so it is rebuilt,
+    or set aside while other materials still use it (each is repaired when applied again)."""
+    group = node_group_builder.ensure_group(plan)
+    if _group_lacks_sockets(group):
+        del group[node_group_builder.PLAN_KEY]
+        group = node_group_builder.ensure_group(plan)
+    return group
+
+
+def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old, own):
+    """(Re)build the add-on's nodes (``old`` the shader node, ``own`` every node of the add-on)
+    in ``mat``.  The artist's nodes are kept, and so are their links to and from the shader
+    node: the new node feeds whatever the old one fed (a Mix Shader, the Material Output)."""
+    tree = mat.node_tree
+    keep_in, keep_out = [], []
+    name, label, width, parent, location = SHADER_NODE, SHADER_NODE, 220, None, None
+    legacy_base = None
+    if old is not None:
+        for sock in old.inputs:
+            for link in sock.links:
+                if link.from_node not in own:
+                    keep_in.append((link.from_socket, sock.name))
+        for sock in old.outputs:
+            for link in sock.links:
+                if link.to_node not in own:
+                    keep_out.append((sock.name, link.to_socket))
+        name, label, width, parent = old.name, old.label, old.width, old.parent
+        location = tuple(old.location)
+        old_inputs = [sock.name for sock in old.inputs]
+        stashed = stash_animation(mat, old.name)
+        legacy_base = legacy_base_links(old, params)
+        if legacy_base is not None:
+            handled = {*BASE_CHANNELS, legacy_tint(old).name}
+            keep_in = [(src, sock_name) for src, sock_name in keep_in if sock_name not in handled]
+    for n in own:
+        tree.nodes.remove(n)
+    out = active_output(tree)
+    if out is None:
+        out = tree.nodes.new("ShaderNodeOutputMaterial")
+        out.location = (400, 0)
+    if backend == "nodes":
+        group = _group_for(plan)
+        node = tree.nodes.new("ShaderNodeGroup")
+        node.node_tree = group
+    else:
+        node = tree.nodes.new("ShaderNodeScript")
+        node.mode = "INTERNAL"
+        text = osl_backend.text_for(plan)
+        text[TEXT_KEY] = True
+        osl_backend.compile_script_node(node, script=text)
+    node.name = name
+    node.label = label
+    node.width = width
+    if parent is not None:
+        node.parent = parent
+    node.location = location if location is not None else (out.location[0] - 300, out.location[1])
+    stamp(node, "shader")
+    if old is None:  # a first build: the material shows the layered shader
+        tree.links.new(find_socket(node.outputs, "BSDF"), out.inputs["Surface"])
+    for from_socket, sock_name in keep_in:
+        target = find_socket(node.inputs, sock_name)
+        if target is not None:
+            tree.links.new(from_socket, target)
+    for sock_name, to_socket in keep_out:
+        source = find_socket(node.outputs, sock_name)
+        if source is not None:
+            tree.links.new(source, to_socket)
+    if old is not None:
+        restore_animation(mat, stashed, node, old_inputs)
+    if legacy_base is not None:
+        link_legacy_base(tree, node, *legacy_base)
+    base_in = find_socket(node.inputs, "Base Shader")
+    spec = base_node(params)
+    if spec is not None and base_in is not None and not base_in.is_linked:
+        base = tree.nodes.new(spec.node_type)
+        base.name = base.label = f"{OWN_PREFIX} {spec.label}"
+        base.location = (node.location[0] - 250, node.location[1] - 300)
+        if parent is not None:
+            base.parent = parent
+        stamp(base, "base")
+        tree.links.new(base.outputs[0], base_in)
+    for k, (aov_name, socket_name, kind) in enumerate(((AOV_THICKNESS, "Thickness", "Value"),
+                                                       (AOV_LOWER_NORMAL, "Lower Normal", "Color"),
+                                                       (AOV_UPPER_NORMAL, "Upper Normal", "Color"))):
+        src = find_socket(node.outputs, socket_name)
+        if src is None:
+            continue
+        aov = tree.nodes.new("ShaderNodeOutputAOV")
+        aov.name = aov.label = f"{OWN_PREFIX} AOV {aov_name}"
+        aov.aov_name = aov_name
+        aov.location = (out.location[0], out.location[1] - 200 - 150 * k)
+        stamp(aov, "aov")
+        tree.links.new(src, aov.inputs[kind])
+    return node
+
