@@ -6,6 +6,10 @@ from types import SimpleNamespace
 import bpy
 import pytest
 
+from layered_brdf_addon.backends import node_group as node_group_builder
+from layered_brdf_addon.blender.material import input_value, shader_node
+from layered_brdf_addon.model.params import iter_sockets
+
 
 @pytest.fixture(scope="module", autouse=True)
 def addon():
@@ -110,3 +114,16 @@ def draw_panels(obj):
 def labels(log, alert=None):
     """The labels of a panel log (only the alerts, or only the others, when ``alert`` is given)."""
     return [e[1] for e in log if e[0] == "label" and (alert is None or e[2] == alert)]
+
+
+def built_plan(mat):
+    """Key of the effect plan the material's node group was built for."""
+    node = shader_node(mat)
+    assert node.bl_idname == "ShaderNodeGroup"
+    return node.node_tree[node_group_builder.PLAN_KEY]
+
+
+def socket_values(mat):
+    """The parameter values in the material's shader node sockets."""
+    node = shader_node(mat)
+    return {s.name: input_value(node, s.name) for s in iter_sockets()}
