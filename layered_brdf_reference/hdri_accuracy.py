@@ -10,7 +10,6 @@ twin: thickness follows the height pattern over the preset's range.
 from __future__ import annotations
 
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 

@@ -10,99 +10,16 @@ once and not named is written inline; one never used is dropped.  bpy-free.
 from __future__ import annotations
 
 import contextlib
-
 import inspect
 import math
-import re
-import sys
-from dataclasses import dataclass, field
 
-from .symbolic import Arithmetic, kind_of
+from .osl_text import (DECLARATION, PREC_ADD, PREC_ATOM, PREC_CMP, PREC_MUL, PREC_TERNARY, RENAMES, RESERVED, TOKEN,
+                       FunctionBody, Statement, Val, doc_comment, literal, run_capturing_locals, vector_literal)
+from .symbolic import kind_of
 
 Number = (int, float)
 
 # Identifiers a temporary may not take: OSL keywords, globals and the functions we call.
-RESERVED = set("""
-and break closure color continue do else emit float for if illuminance illuminate int matrix normal not or output
-point public return string struct vector void while shader surface volume displacement true false
-P I N Ng u v dPdu dPdv time dtime dPdtime Ps Ci
-dot cross normalize length clamp max min sqrt exp cos sin mix noise transform radians microfacet diffuse
-phong_ramp isnan isfinite abs floor select
-""".split())
-RENAMES = {"v": "V"}
-
-PREC_ATOM, PREC_UNARY, PREC_MUL, PREC_ADD, PREC_CMP, PREC_TERNARY = 100, 14, 13, 12, 9, 3
-_TOKEN = re.compile(r"\x01(\d+)\|(\d+)\x02")
-
-
-def literal(x) -> str:
-    """An OSL float literal."""
-    x = float(x)
-    if not math.isfinite(x):
-        x = math.copysign(3.0e38, x) if not math.isnan(x) else 0.0
-    s = f"{x:.9g}"
-    return s if any(c in s for c in ".en") else s + ".0"
-
-
-def _vector_literal(t) -> str:
-    return f"vector({', '.join(literal(c) for c in t)})"
-
-
-_kind = kind_of
-
-
-class Val(Arithmetic):
-    """An OSL expression: a reference to a statement (a token) or an atom (a global, say)."""
-
-    __slots__ = ("ops", "ref", "kind", "token")
-
-    def __init__(self, ops, ref: str, kind: str, token: int | None = None):
-        self.ops, self.ref, self.kind, self.token = ops, ref, kind, token
-
-    def __neg__(self):
-        return self.ops.emit(self.kind, f"-{self.ops.use(self, PREC_UNARY + 1)}", PREC_UNARY)
-
-
-@dataclass
-class Statement:
-    token: int
-    kind: str
-    expr: str | None  # None: declared without a value (an output of a call)
-    prec: int = PREC_ATOM
-    hint: str | None = None  # the Python local that holds it
-    output: str | None = None  # assigned straight to this output parameter
-    raw: bool = False  # a statement of its own (a call with outputs, a closure sum): always kept
-    name: str = ""
-    key_hint: bool = False  # the hint is an output's key: locals do not rename it
-
-
-@dataclass
-class FunctionBody:
-    """The statements of one OSL function (or of the shader) being written."""
-
-    name: str
-    params: list = field(default_factory=list)  # (token, kind, name, is_output)
-    statements: list = field(default_factory=list)
-    ret: tuple | None = None  # (kind, expression)
-    by_token: dict = field(default_factory=dict)
-    code: object = None  # the code of the Python function this body is written from
-    frame: object = None  # that function's frame, once it has made a statement
-
-    def note_frame(self) -> None:
-        """Keep the frame of the function being written, found on the stack the first time it
-        makes a statement: once the function returns, its frame still holds its locals, and
-        the OSL names its variables after them."""
-        if self.frame is not None or self.code is None:
-            return
-        frame = sys._getframe(2)
-        while frame is not None and frame.f_code is not self.code:
-            frame = frame.f_back
-        self.frame = frame
-
-
-_DECL = {"float": "float", "vector": "vector", "int": "int"}
-
-
 class OslOps:
     """Writes OSL: functions (in the order they are first needed) and one body at a time."""
 
@@ -151,7 +68,7 @@ class OslOps:
         if isinstance(x, Number):
             s = literal(x)
             return f"({s})" if s.startswith("-") and min_prec > PREC_ADD else s
-        return _vector_literal(x)
+        return vector_literal(x)
 
     def atom(self, text: str, kind: str) -> Val:
         return Val(self, text, kind)
@@ -161,7 +78,7 @@ class OslOps:
 
     # ------------------------------------------------------------------ arithmetic
     def binary(self, op, a, b):
-        ka, kb = _kind(a), _kind(b)
+        ka, kb = kind_of(a), kind_of(b)
         if isinstance(a, Number) and isinstance(b, Number):
             return {"+": a + b, "-": a - b, "*": a * b, "/": a / b if b != 0 else 0.0}[op]
         if op == "*" and ((isinstance(a, Number) and a == 0.0) or (isinstance(b, Number) and b == 0.0)):
@@ -179,11 +96,11 @@ class OslOps:
         return self.emit(kind, f"{self.use(a, prec)} {op} {self.use(b, prec + 1)}", prec)
 
     def is_vector(self, x):
-        return _kind(x) == "vector"
+        return kind_of(x) == "vector"
 
     def _triple(self, x, vector: bool):
         """``x`` as an argument of a per-component function: a scalar widened when needed."""
-        if vector and _kind(x) != "vector":
+        if vector and kind_of(x) != "vector":
             return self.atom(f"vector({self.use(x)})", "vector") if not isinstance(x, Number) else \
                 self.atom(f"vector({literal(x)})", "vector")
         return x
@@ -191,13 +108,13 @@ class OslOps:
     def _unary(self, name, x, fn):
         if isinstance(x, Number):
             return fn(x)
-        return self.call_expr(name, (x,), _kind(x))
+        return self.call_expr(name, (x,), kind_of(x))
 
     def clamp(self, x, lo, hi):
         if isinstance(x, Number):
             return min(max(x, lo), hi)
-        v = _kind(x) == "vector"
-        return self.call_expr("clamp", (x, self._triple(lo, v), self._triple(hi, v)), _kind(x))
+        v = kind_of(x) == "vector"
+        return self.call_expr("clamp", (x, self._triple(lo, v), self._triple(hi, v)), kind_of(x))
 
     def sqrt(self, x):
         return self._unary("safe_sqrt", x, lambda a: math.sqrt(max(a, 0.0)))
@@ -217,7 +134,7 @@ class OslOps:
     def _extremum(self, name, a, b, fn):
         if isinstance(a, Number) and isinstance(b, Number):
             return fn(a, b)
-        v = "vector" in (_kind(a), _kind(b))
+        v = "vector" in (kind_of(a), kind_of(b))
         return self.call_expr(name, (self._triple(a, v), self._triple(b, v)), "vector" if v else "float")
 
     def maximum(self, a, b):
@@ -227,7 +144,7 @@ class OslOps:
         return self._extremum("min", a, b, min)
 
     def _compare(self, op, a, b):
-        if "vector" in (_kind(a), _kind(b)):  # per component, 1 or 0
+        if "vector" in (kind_of(a), kind_of(b)):  # per component, 1 or 0
             name = "greater_than" if op == ">" else "less_than"
             return self.call_expr(name, (self._triple(a, True), self._triple(b, True)), "vector")
         return self.emit("int", f"{self.use(a, PREC_CMP + 1)} {op} {self.use(b, PREC_CMP + 1)}", PREC_CMP)
@@ -241,11 +158,11 @@ class OslOps:
     def _select(self, c, a, b, kind):
         if isinstance(c, Number):
             return a if c > 0.5 else b
-        if "vector" in (_kind(a), _kind(b)):
+        if "vector" in (kind_of(a), kind_of(b)):
             kind = "vector"
-        if _kind(c) == "vector":  # per component
+        if kind_of(c) == "vector":  # per component
             return self.call_expr("mix", (self._triple(b, True), self._triple(a, True), c), "vector")
-        cond = self.use(c, PREC_TERNARY + 1) if _kind(c) == "int" else f"{self.use(c, PREC_CMP + 1)} > 0.5"
+        cond = self.use(c, PREC_TERNARY + 1) if kind_of(c) == "int" else f"{self.use(c, PREC_CMP + 1)} > 0.5"
         return self.emit(kind, f"{cond} ? {self.use(a, PREC_TERNARY + 1)} : {self.use(b, PREC_TERNARY + 1)}",
                          PREC_TERNARY)
 
@@ -294,17 +211,17 @@ class OslOps:
         return self.call_expr("nan_to_zero", (x,), "float")
 
     def triple(self, x, y, z):
-        return self.atom(_vector_literal((x, y, z)), "vector")
+        return self.atom(vector_literal((x, y, z)), "vector")
 
     def madd(self, a, b, c):
         return a * b + c
 
     def power(self, x, p):
-        return self.call_expr("pow", (x, p), _kind(x))
+        return self.call_expr("pow", (x, p), kind_of(x))
 
     def footprint(self, x):
         """How much ``x`` changes across the pixel: OSL's ``filterwidth`` (from its derivatives)."""
-        return self.call_expr("filterwidth", (x,), _kind(x))
+        return self.call_expr("filterwidth", (x,), kind_of(x))
 
     def components(self, v):
         return tuple(self.emit("float", f"{self.use(v, PREC_ATOM)}[{k}]") for k in range(3))
@@ -323,7 +240,7 @@ class OslOps:
         return self._invoke(fn, {p: inputs[p] for p in order}, static)
 
     def _invoke(self, fn, inputs: dict, settings: dict):
-        kinds = tuple((k, _kind(v)) for k, v in inputs.items())
+        kinds = tuple((k, kind_of(v)) for k, v in inputs.items())
         key = (fn.__qualname__, tuple(sorted(settings.items())), kinds)
         if key not in self.functions:
             self._define(fn, key, kinds, settings)
@@ -366,12 +283,12 @@ class OslOps:
             body.by_token[tok] = st
             body.params.append(st)
             params[pname] = Val(self, "", kind, tok)
-        result, local_names = _run_capturing_locals(fn, self, params, settings)
+        result, local_names = run_capturing_locals(fn, self, params, settings)
         self._bodies.pop()
         doc = inspect.getdoc(fn) or ""
         if isinstance(result, (Val, *Number)) or (isinstance(result, tuple) and len(result) == 3
                                                  and all(isinstance(c, Number) for c in result)):
-            kind = _kind(result)
+            kind = kind_of(result)
             self._return_kind[key] = kind
             body.ret = (kind, result)
             self.functions[key] = (fname, self._write(body, doc, local_names), None)
@@ -385,7 +302,7 @@ class OslOps:
                 by_id = {id(v): n for n, v in local_names.items()}
                 out_names = [by_id.get(id(v), f"out{i}") for i, v in enumerate(values)]
                 self._output_keys[key] = None
-            outputs = [(n, _kind(v)) for n, v in zip(out_names, values)]
+            outputs = [(n, kind_of(v)) for n, v in zip(out_names, values)]
             body.ret = ("outputs", list(zip(out_names, values)))
             self.functions[key] = (fname, self._write(body, doc, local_names), outputs)
         self.order.append(key)
@@ -393,14 +310,14 @@ class OslOps:
     # ------------------------------------------------------------------ writing
     def _write(self, body: FunctionBody, doc: str, local_names: dict) -> str:
         text = self.resolve(body, local_names)
-        params = ", ".join(f"{_DECL[p.kind]} {p.name}" for p in body.params)
+        params = ", ".join(f"{DECLARATION[p.kind]} {p.name}" for p in body.params)
         if body.ret[0] == "outputs":
-            outs = ", ".join(f"output {_DECL[_kind(v)]} {n}" for n, v in body.ret[1])
+            outs = ", ".join(f"output {DECLARATION[kind_of(v)]} {n}" for n, v in body.ret[1])
             params = f"{params}, {outs}" if params else outs
             rtype = "void"
         else:
-            rtype = _DECL[body.ret[0]]
-        comment = _comment(doc)
+            rtype = DECLARATION[body.ret[0]]
+        comment = doc_comment(doc)
         head = f"{rtype} {body.name}("
         if len(head) + len(params) > 99:
             params = (",\n" + " " * len(head)).join(params.split(", "))
@@ -427,7 +344,7 @@ class OslOps:
         # An output that is a named statement of its own name is written to directly.
         out_targets = set()
         for i, (target, expr) in enumerate(tail):
-            m = _TOKEN.fullmatch(expr)
+            m = TOKEN.fullmatch(expr)
             if target is None or m is None:
                 continue
             st = body.by_token.get(int(m.group(1)))
@@ -439,12 +356,12 @@ class OslOps:
         texts = [st.expr or "" for st in body.statements] + [e for _, e in tail]
         uses: dict[int, int] = {}
         for t in texts:
-            for m in _TOKEN.finditer(t):
+            for m in TOKEN.finditer(t):
                 uses[int(m.group(1))] = uses.get(int(m.group(1)), 0) + 1
         live = []
         for st in reversed(body.statements):
             if not st.raw and st.output is None and uses.get(st.token, 0) == 0:
-                for m in _TOKEN.finditer(st.expr or ""):
+                for m in TOKEN.finditer(st.expr or ""):
                     uses[int(m.group(1))] -= 1
                 continue
             live.append(st)
@@ -490,7 +407,7 @@ class OslOps:
                     return f"({inner})" if st.prec < need else inner
                 return st.name
 
-            return _TOKEN.sub(sub, text)
+            return TOKEN.sub(sub, text)
 
         lines = []
         for st in live:
@@ -499,11 +416,11 @@ class OslOps:
             if st.raw and st.kind == "void":
                 lines.append(f"{indent}{render(st.expr)}")
             elif st.expr is None:
-                lines.append(f"{indent}{_DECL[st.kind]} {st.name};")
+                lines.append(f"{indent}{DECLARATION[st.kind]} {st.name};")
             elif st.output is not None:
                 lines.append(f"{indent}{st.name} = {render(st.expr)};")
             else:
-                lines.append(f"{indent}{_DECL[st.kind]} {st.name} = {render(st.expr)};")
+                lines.append(f"{indent}{DECLARATION[st.kind]} {st.name} = {render(st.expr)};")
         for i, (target, expr) in enumerate(tail):
             if i in out_targets:
                 continue
@@ -515,21 +432,3 @@ class OslOps:
 
     def source_of_functions(self) -> str:
         return "\n".join(self.functions[key][1] for key in self.order)
-
-
-def _comment(doc: str) -> str:
-    if not doc:
-        return ""
-    text = doc.replace("``", "").replace("*/", "* /")
-    lines = text.splitlines()
-    out = ["/* " + lines[0]] + [(" * " + ln).rstrip() for ln in lines[1:]]
-    return "\n".join(out) + " */\n"
-
-
-def _run_capturing_locals(fn, ops, params: dict, settings: dict):
-    """Run ``fn(ops, **params, **settings)``; return its result and its locals at return (from
-    the frame its first statement noted: :meth:`FunctionBody.note_frame`)."""
-    result = fn(ops, **params, **settings)
-    frame = ops.body.frame
-    captured = dict(frame.f_locals) if frame is not None else {}
-    return result, {k: v for k, v in captured.items() if k != "ops" and not (k in params and v is params[k])}

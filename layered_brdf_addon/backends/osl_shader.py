@@ -15,7 +15,8 @@ from ..model.params import (BASE_COLOR_DESCRIPTION, LayeredParams, group_socket_
                             iter_sockets, socket_name)
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
-from .osl_ops import FunctionBody, OslOps, Val, _run_capturing_locals, literal
+from .osl_ops import OslOps
+from .osl_text import FunctionBody, Val, literal, run_capturing_locals
 
 OSL_VERSION = 3  # 3: the base colour one colour parameter (BaseColor), no tint
 SHADER_NAME = "layered_brdf"
@@ -212,7 +213,7 @@ def shader_source(plan: EffectPlan) -> str:
     ops = ShaderOps()
     body = FunctionBody(SHADER_NAME, code=program.layered_surface.__code__)
     ops._bodies.append(body)
-    res, local_names = _run_capturing_locals(program.layered_surface, ops, {}, {"plan": plan})
+    res, local_names = run_capturing_locals(program.layered_surface, ops, {}, {"plan": plan})
     x = res.extras
     ops.raw("/* The artist's own shader under the layer receives what the top transmits, 1 - F(v). */")
     ops.raw(f"BSDF = {ops.use(x['base_weight'], 14)} * Base;")

@@ -13,8 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
-import bpy  # first: it makes bmesh and mathutils importable
-import bmesh
+import bpy  # first: it makes mathutils importable
 import numpy as np
 from mathutils import Matrix, Vector
 
