@@ -11,7 +11,7 @@ from __future__ import annotations
 from ..backends import node_group as node_group_builder
 from ..backends.osl_shader import SOCKET_NAMES
 from ..model import ops_numpy
-from ..model.params import (BASE_COLOR_SOCKET, LOWER_MEDIUM_KEYS, LayeredParams, ParameterError, group_socket_name,
+from ..model.params import (BASE_COLOR_SOCKET, LayeredParams, ParameterError, group_socket_name,
                             iter_sockets)
 from .stored_keys import BASE_CHANNELS
 
@@ -72,12 +72,16 @@ def missing_inputs(node) -> list[str]:
     deleted or renamed a socket of its group).
 
     A node of this version has one for every parameter.  A node an older version built may lack
-    the lower medium's (r2, k2, added with physical optics; it then has none of them, and an
-    upgrade gives them the material's values); every other parameter was in the first version."""
-    lower = [k for k in LOWER_MEDIUM_KEYS if param_socket(node, k)[0] is not None]
-    expected = [s.name for s in iter_sockets()
-                if s.name not in LOWER_MEDIUM_KEYS or lower or _built_by_this_version(node)]
-    return [name for name in expected if param_socket(node, name)[0] is None]
+    the parameters that came after it, each addition whole (:attr:`ParamSpec.added`: the lower
+    medium's r2 and k2 came with physical optics): such a node has none of an addition's inputs,
+    and an upgrade gives them the material's values; the first version's parameters it must have."""
+    specs = list(iter_sockets())
+    present = {spec.name for spec in specs if param_socket(node, spec.name)[0] is not None}
+    if _built_by_this_version(node):
+        return [spec.name for spec in specs if spec.name not in present]
+    additions_held = {spec.added for spec in specs if spec.added and spec.name in present}
+    return [spec.name for spec in specs
+            if spec.name not in present and (not spec.added or spec.added in additions_held)]
 
 
 def node_damage(node) -> str | None:

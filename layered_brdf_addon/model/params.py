@@ -44,6 +44,7 @@ class ParamSpec:
     socket_label: str = ""  # the node group's socket (a colour socket holds several parameters)
     subtype: str = "NONE"  # the socket's Blender subtype: "WAVELENGTH" (nm), "FACTOR" (0-1 slider)
     component: int | None = None  # the parameter's channel of a colour socket
+    added: str = ""  # what brought the parameter in after the first version (older files lack its socket)
 
     @property
     def allowed(self) -> str:
@@ -82,12 +83,12 @@ def _fmt(x: float) -> str:
 
 
 def _p(default, label, description, *, unit="", range=(-math.inf, math.inf), soft=None,
-       options=(), socket=True, group="Layer", socket_label="", subtype="NONE", component=None):
+       options=(), socket=True, group="Layer", socket_label="", subtype="NONE", component=None, added=""):
     kind = "enum" if options else ("bool" if isinstance(default, bool) else "float")
     meta = dict(label=label, description=description, unit=unit, min=range[0], max=range[1],
                 soft_min=None if soft is None else soft[0], soft_max=None if soft is None else soft[1],
                 options=tuple(options), socket=socket and kind == "float", group=group, kind=kind,
-                socket_label=socket_label, subtype=subtype, component=component)
+                socket_label=socket_label, subtype=subtype, component=component, added=added)
     return field(default=default, metadata={"layered": meta})
 
 
@@ -98,6 +99,8 @@ BASE_LAYERS = ("none", "transparent", "metal")
 OPTICS_MODES = ("paper", "physical")
 # "custom", then the named media of the measured table (model/data/media.json).
 LOWER_MEDIA = ("custom",) + media_names()
+# What added the lower medium's sockets (files saved before it lack all six).
+PHYSICAL_OPTICS = "physical optics"
 # The parameters a named lower medium fills: its n and k at R, G, B.
 LOWER_MEDIUM_KEYS = ("r2_r", "r2_g", "r2_b", "k2_r", "k2_g", "k2_b")
 ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
@@ -187,22 +190,25 @@ class LayeredParams:
                            group="Lower boundary")
     r2_r: float = _p(1.5, "Lower index R", "Refractive index n of the medium under the layer at 645 nm (red); "
                      "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
-                     socket_label="Lower IOR (Red)")
+                     socket_label="Lower IOR (Red)", added=PHYSICAL_OPTICS)
     r2_g: float = _p(1.5, "Lower index G", "Refractive index n of the medium under the layer at 525 nm (green); "
                      "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
-                     socket_label="Lower IOR (Green)")
+                     socket_label="Lower IOR (Green)", added=PHYSICAL_OPTICS)
     r2_b: float = _p(1.5, "Lower index B", "Refractive index n of the medium under the layer at 445 nm (blue); "
                      "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
-                     socket_label="Lower IOR (Blue)")
+                     socket_label="Lower IOR (Blue)", added=PHYSICAL_OPTICS)
     k2_r: float = _p(0.0, "Lower extinction R", "Extinction coefficient k of the medium under the layer at 645 nm "
                      "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
-                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Red)")
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Red)",
+                     added=PHYSICAL_OPTICS)
     k2_g: float = _p(0.0, "Lower extinction G", "Extinction coefficient k of the medium under the layer at 525 nm "
                      "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
-                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Green)")
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Green)",
+                     added=PHYSICAL_OPTICS)
     k2_b: float = _p(0.0, "Lower extinction B", "Extinction coefficient k of the medium under the layer at 445 nm "
                      "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
-                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Blue)")
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Blue)",
+                     added=PHYSICAL_OPTICS)
     # --- specular and diffuse --------------------------------------------
     e0: float = _p(90.0, "Upper exponent", "Phong exponent of the upper boundary (higher is sharper)",
                    range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular", socket_label="Upper Exponent")
