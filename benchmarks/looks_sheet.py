@@ -34,7 +34,7 @@ def principled_label(kw: dict) -> str:
 
 def main(argv=None) -> int:
     from layered_brdf_addon.cli.lookdev import check_sheet_output
-    from layered_brdf_addon.cli.requests import int_option
+    from layered_brdf_addon.cli.option_values import int_option
     from layered_brdf_addon.model.params import ParameterError
     from layered_brdf_addon.model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS
 

@@ -20,7 +20,8 @@ import pytest
 from layered_brdf_addon.cli import commands as cli
 from layered_brdf_addon.cli import gallery, render_job
 from layered_brdf_addon.cli.job_files import load_job_file
-from layered_brdf_addon.cli.requests import FileValueError, request_from_options
+from layered_brdf_addon.cli.input_files import FileValueError
+from layered_brdf_addon.cli.requests import request_from_options
 from layered_brdf_addon.cli.staging import WriteError, writing
 from layered_brdf_addon.model.params import ParameterError
 from layered_brdf_addon.model.presets import preset

@@ -29,7 +29,7 @@ from ..fit.free import default_vary
 from ..fit.solve import FitCancelled
 from ..fit.targets import SphereTarget, TargetError
 from ..model.params import LayeredParams, ParameterError
-from ..model.policy import plan_effects
+from ..model.policy import check_backend, plan_effects
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset_label
 from . import sync, user_presets
 from .animation import animated_parameters
@@ -109,7 +109,7 @@ def apply_fitted(target, params: LayeredParams):
         sync.adopt(target)
         backend = settings(target).backend
         params = params.validate()
-        sync.check_backend(params, backend)
+        check_backend(backend, params.lobe)
         plan = plan_effects(params, animated_parameters(target))
         mat = sync.apply(target, params, backend, plan, preview=True)
     settings(mat).preset = ""  # fitted values are no preset's

@@ -27,7 +27,7 @@ from .material_values import check_local, is_layered, layered_material_of, legac
 from .own_nodes import shader_node
 from .slots import remove_layered_material
 from .sockets import check_node
-from .stored_keys import BACKEND_KEY, BUILD_KEY, SYNC_KEY, recorded_settings, setting_specs
+from .stored_keys import BACKEND_KEY, BUILD_KEY, SYNC_KEY, recorded_settings, setting_specs, settings_record
 
 _suspended = 0
 
@@ -49,10 +49,6 @@ def updates_suspended() -> bool:
 
 
 # --- what a material should be -------------------------------------------------------------------
-def check_backend(params: LayeredParams, backend: str) -> None:
-    policy.check_backend(backend, params.lobe)
-
-
 def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
     """What the material should be built as: (parameters, backend, plan); ParameterError if it can't be
     (also when its shader node lacks a socket: only applying it again repairs that)."""
@@ -62,7 +58,7 @@ def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
         check_node(mat, node)
     params = params_of(mat)
     backend = settings(mat).backend
-    check_backend(params, backend)
+    policy.check_backend(backend, params.lobe)
     return params, backend, plan_effects(params, animated_parameters(mat))
 
 
@@ -83,7 +79,7 @@ def material_problem(mat) -> str | None:
 def signature(mat, params: LayeredParams, backend: str, plan: EffectPlan) -> str:
     """What the material was last synchronised to: backend, plan, settings and the build it got."""
     return json.dumps({"backend": backend, "plan": plan.to_dict(),
-                       "settings": {s.name: getattr(params, s.name) for s in setting_specs()},
+                       "settings": settings_record(params),
                        "build": mat.get(BUILD_KEY)}, sort_keys=True)
 
 
@@ -174,8 +170,7 @@ def apply_to_object(obj, params: LayeredParams | None = None, backend: str | Non
     params = params.validate()
     if backend is None:
         backend = settings(mat).backend if mat is not None else "nodes"
-    policy.check_backend(backend)
-    check_backend(params, backend)
+    policy.check_backend(backend, params.lobe)
     animated = animated_parameters(mat) if mat is not None else set()
     return apply(obj, params, backend, plan_effects(params, animated), preview)
 

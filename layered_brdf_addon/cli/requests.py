@@ -16,7 +16,6 @@ from ..model import policy
 from ..model.params import LayeredParams, ParameterError
 from ..model.presets import PRESETS, preset
 from ..model.sphere import OrthoCamera, Sun
-from .input_files import FileValueError  # noqa: F401  (what request_from_options raises for a file's value)
 from .input_files import check_blend_file, file_label, from_file, load_params_file, merged_values, same_file
 from .option_values import (MAX_STEM_BYTES, MAX_TEXT, OPTION_ALLOWED, PARAM_NAMES, check_name, check_plain,
                             float_option, int_option, option_flag, parse_resolution, parse_sun, short_name, shown)
@@ -163,7 +162,7 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
     With ``confine`` the outputs must stay inside ``output_dir`` (a batch's jobs).  No
     output may replace the params file, the .blend or one of ``extra_inputs``.  Every
     output target is checked (:func:`check_output`).  Raises :class:`ParameterError`
-    naming the first invalid option, or a :class:`FileValueError` naming the params
+    naming the first invalid option, or a :class:`~.input_files.FileValueError` naming the params
     file and the key when the invalid value was read from that file.
     """
     opts = {k: v for k, v in options.items() if v is not None}
