@@ -82,12 +82,12 @@ def test_a_file_with_the_older_sockets_opens_migrated_and_renders_the_same(tmp_p
         combine = base_b.links[0].from_node
         assert combine.inputs[1].links[0].from_node.name == "Artist checker"
         assert combine.inputs[0].default_value == pytest.approx(values["Shared B"].base_r)
-        # The artist's link into d_min now feeds Thickness Min; the keyframe on e0 animates Upper Exponent.
+        # The artist's link into d_min now feeds Thickness Min; the keyframe on e0 animates Upper Roughness.
         tree = mats["Linked and keyed"].node_tree
         node = nodes["Linked and keyed"]
         assert node.inputs["Thickness Min"].links[0].from_node == tree.nodes["Artist value"]
         paths = [fc.data_path for fc in tree.animation_data.action.layers[0].strips[0].channelbags[0].fcurves]
-        assert [tree.path_resolve(p.rsplit(".", 1)[0]) for p in paths] == [node.inputs["Upper Exponent"]]
+        assert [tree.path_resolve(p.rsplit(".", 1)[0]) for p in paths] == [node.inputs["Upper Roughness"]]
         assert "e0" in animated_parameters(mats["Linked and keyed"])
         after = render_passes().beauty
         mask = np.any(before[..., :3] > 0.0, axis=-1)

@@ -6,6 +6,7 @@ Renders of the add-on's materials are in test_ui_renders.py.
 from __future__ import annotations
 
 import json
+import math
 from types import SimpleNamespace
 
 import bpy
@@ -160,7 +161,7 @@ def test_toggling_an_effect_rebuilds_the_tree():
     assert built_plan(mat) == "sDNPXB"
     assert shader_node(mat).node_tree.name == node_group_builder.group_name(desired(mat)[2])
     settings(mat).normal_mode = "tilted"
-    param_socket(shader_node(mat), "tilt")[0].default_value = 12.0
+    param_socket(shader_node(mat), "tilt")[0].default_value = math.radians(12.0)  # an angle socket: radians
     bpy.context.view_layer.update()
     assert built_plan(mat) == "sDNTXB"
     node = shader_node(mat)

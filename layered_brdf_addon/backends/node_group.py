@@ -22,7 +22,7 @@ from ..model.policy import check_backend
 from .node_ops import Expr, NodeOps
 from .osl_shader import shader_source
 
-NODE_GROUP_VERSION = 5  # 5: sockets named for people, in panels; the base colour one colour socket
+NODE_GROUP_VERSION = 6  # 6: Roughness sockets, Tilt as an angle; 5: sockets named for people, in panels
 GROUP_PREFIX = "Layered BRDF"
 STAMP_KEY = "layered_brdf_version"
 OPEN_PANELS = ("Layer", "Specular", "Diffuse")  # open on a new node; Noise and Lower boundary start closed
@@ -84,7 +84,17 @@ def build_stamp() -> str:
 
 
 def group_name(plan: EffectPlan) -> str:
-    return f"{GROUP_PREFIX} [{plan.key}]"
+    """The group's name for people, and unique per plan: "Layered BRDF — Physical film, analytic
+    colour, noise thickness [SDNPxBAT]" (the bracket: the plan's key, :attr:`EffectPlan.key`)."""
+    return f"{GROUP_PREFIX} \u2014 {plan.title} [{plan.key}]"
+
+
+def group_description(plan: EffectPlan) -> str:
+    """The group's tooltip in the Add menu and the node editor: what it simulates, and where its modes are set."""
+    return (f"Granier & Heidrich's layered RGB BRDF: a thin film over a surface. {plan.title}: "
+            + "; ".join(plan.describe())
+            + ". The modes (thickness pattern, lower boundary, optics, accuracy) are set in Properties "
+              "> Material > Layered BRDF, which rebuilds this group")
 
 
 def is_current(group, plan: EffectPlan) -> bool:
@@ -132,11 +142,11 @@ def _interface(group):
         (spec,) = sock.specs
         s = iface.new_socket(sock.name, in_out="INPUT", socket_type="NodeSocketFloat", parent=panel)
         s.subtype = spec.subtype
-        s.default_value = spec.default
-        s.min_value = max(spec.min, -3.0e38)
-        s.max_value = min(spec.max, 3.0e38)
-        unit = f" ({spec.unit})" if spec.unit else ""
-        s.description = f"{spec.description}{unit}. {spec.allowed[0].upper()}{spec.allowed[1:]}"
+        lo, hi = P_.socket_limits(spec, "nodes")
+        s.default_value = P_.socket_default(spec, "nodes")
+        s.min_value = max(lo, -3.0e38)
+        s.max_value = min(hi, 3.0e38)
+        s.description = P_.socket_tooltip(spec)
     s = iface.new_socket("Base Shader", in_out="INPUT", socket_type="NodeSocketShader", parent=panels["Diffuse"])
     s.description = "Your own material under the layer; it receives what the top boundary transmits, 1 - F"
     iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
@@ -150,6 +160,8 @@ def _interface(group):
 
 class GroupOps(NodeOps):
     """Node ops at the top of the group: the material's inputs and the shading point."""
+
+    SOCKETS = "nodes"  # whose sockets the inputs are (params.socket_units)
 
     def __init__(self, group, gin, **kw):
         super().__init__(group, **kw)
@@ -203,6 +215,9 @@ def build_into(group, plan: EffectPlan) -> None:
     """(Re)build ``group``'s nodes for ``plan``: idempotent, stamps version and plan."""
     group.nodes.clear()
     _interface(group)
+    group.description = group_description(plan)
+    if hasattr(group, "color_tag"):
+        group.color_tag = "SHADER"
     gin = group.nodes.new("NodeGroupInput")
     gin.location = (-200.0, 0.0)
     gout = group.nodes.new("NodeGroupOutput")

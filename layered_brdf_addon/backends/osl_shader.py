@@ -12,7 +12,7 @@ import functools
 
 from ..model import program
 from ..model.params import (BASE_COLOR_DESCRIPTION, LayeredParams, group_socket_name, iter_group_sockets,
-                            iter_sockets, socket_name)
+                            iter_sockets, socket_default, socket_limits, socket_name)
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
 from .osl_ops import OslOps
@@ -154,6 +154,8 @@ closure color glossy_lobe(vector Nc, vector U, float e, float alpha_x, float alp
 class ShaderOps(OslOps):
     """OSL ops in the shader body: the shader's parameters and globals."""
 
+    SOCKETS = "osl"  # whose sockets the inputs are (params.socket_units)
+
     def input(self, name):
         if name == "Normal":
             return self.atom(name, "vector")
@@ -190,12 +192,15 @@ def _parameter_lines() -> list[str]:
                          f'      [[ string label = "{sock.name}", string help = "{BASE_COLOR_DESCRIPTION}" ]]')
             continue
         (spec,) = sock.specs
+        lo, hi = socket_limits(spec, "osl")
         unit = f" ({spec.unit})" if spec.unit else ""
-        meta = [f'string label = "{sock.name}"', f'string help = "{spec.description}{unit}"',
-                f"float min = {literal(spec.min)}", f"float max = {literal(spec.max)}"]
-        if spec.soft_min is not None:
+        help_text = spec.socket_description if spec.socket_units else f"{spec.description}{unit}"
+        meta = [f'string label = "{sock.name}"', f'string help = "{help_text}"',
+                f"float min = {literal(lo)}", f"float max = {literal(hi)}"]
+        if spec.soft_min is not None and not spec.socket_units:
             meta += [f"float slidermin = {literal(spec.soft_min)}", f"float slidermax = {literal(spec.soft_max)}"]
-        lines.append(f"float {socket_name(spec)} = {literal(spec.default)}\n      [[ {', '.join(meta)} ]]")
+        default = socket_default(spec, "osl")
+        lines.append(f"float {socket_name(spec)} = {literal(default)}\n      [[ {', '.join(meta)} ]]")
     lines += [
         "closure color Base = 0",
         "output closure color BSDF = 0",

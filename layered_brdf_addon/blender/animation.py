@@ -11,7 +11,8 @@ import re
 
 from ..model.params import iter_sockets
 from .own_nodes import shader_node
-from .sockets import find_socket, input_linked, param_socket, socket_parameters
+from .sockets import find_socket, input_linked, param_socket, socket_parameter, socket_parameters
+from .unit_conversion import convert_fcurve
 
 _STASH = "__layered_brdf_rebuild__"  # a placeholder node name while the shader is replaced
 _SOCKET_PATH = re.compile(r'nodes\["(?P<node>(?:[^"\\]|\\.)*)"\]\.inputs\[(?P<index>\d+|"(?:[^"\\]|\\.)*")\]'
@@ -93,8 +94,13 @@ def stash_animation(mat, name: str) -> list:
 
 
 def restore_animation(mat, stashed, node, old_inputs) -> None:
-    """Re-point stashed fcurves at ``node``, input sockets by name (their order may differ)."""
+    """Re-point stashed fcurves at ``node``, input sockets by name (their order may differ).
+    ``old_inputs``: (name, units) of the old node's inputs; an fcurve of a socket whose units
+    changed (an exponent that is now a Roughness) is converted (:mod:`.unit_conversion`)."""
     params = {spec.name for spec in iter_sockets()}
+    old_units = dict(old_inputs)
+    drivers = {fc.as_pointer() for owner, _ in _owners(mat) if owner.animation_data
+               for fc in owner.animation_data.drivers}
 
     def new_input(old_name):
         if old_name in params:  # an older node's socket of a parameter: maybe a colour's channel now
@@ -103,20 +109,26 @@ def restore_animation(mat, stashed, node, old_inputs) -> None:
 
     for fc, prefix, rest in stashed:
         m = _INPUT_INDEX.match(rest)
-        sock, channel = None, None
+        sock, channel, old_name = None, None, None
         if m is not None:
             i = int(m.group(1))
             if i < len(old_inputs):
-                sock, channel = new_input(old_inputs[i])
+                old_name = old_inputs[i][0]
+                sock, channel = new_input(old_name)
             if sock is not None:
                 index = next(k for k, s in enumerate(node.inputs) if s == sock)
                 rest = f".inputs[{index}]" + rest[m.end():]
         else:
             m = _INPUT_NAME.match(rest)
             if m is not None:
-                sock, channel = new_input(m.group(1))
+                old_name = m.group(1)
+                sock, channel = new_input(old_name)
                 if sock is not None:
                     rest = f'.inputs["{sock.name}"]' + rest[m.end():]
         fc.data_path = prefix + _node_prefix(node.name) + rest
         if channel is not None:
             fc.array_index = channel
+        if sock is not None and channel is None:
+            spec, units = socket_parameter(node, sock)
+            if spec is not None:
+                convert_fcurve(fc, old_units.get(old_name, ""), units, fc.as_pointer() in drivers)

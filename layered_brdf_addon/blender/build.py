@@ -19,10 +19,11 @@ from .animation import animated_parameters, restore_animation, stash_animation
 from .migration import claim, legacy_base_links, link_legacy_base, repair
 from .own_nodes import active_output, stamp
 from .slots import material_for
-from .sockets import find_socket, legacy_tint, node_damage, set_inputs
+from .sockets import find_socket, held_units, legacy_tint, node_damage, set_inputs, socket_parameter
 from .stored_keys import (AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL, BACKEND_KEY, BASE_CHANNELS, BUILD_KEY,
                           ENUMS_KEY, OWN_PREFIX, ROLE_KEY, SHADER_NODE, TEXT_KEY, settings_record)
 from .targets import params_argument, shown
+from .unit_conversion import link_converted
 from .unused_data import remove_unused_own_data
 
 
@@ -126,19 +127,19 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
         for sock in old.inputs:
             for link in sock.links:
                 if link.from_node not in own:
-                    keep_in.append((link.from_socket, sock.name))
+                    keep_in.append((link.from_socket, sock.name, socket_parameter(old, sock)))
         for sock in old.outputs:
             for link in sock.links:
                 if link.to_node not in own:
                     keep_out.append((sock.name, link.to_socket))
         name, label, width, parent = old.name, old.label, old.width, old.parent
         location = tuple(old.location)
-        old_inputs = [sock.name for sock in old.inputs]
+        old_inputs = [(sock.name, socket_parameter(old, sock)[1]) for sock in old.inputs]
         stashed = stash_animation(mat, old.name)
         legacy_base = legacy_base_links(old, params)
         if legacy_base is not None:
             handled = {*BASE_CHANNELS, legacy_tint(old).name}
-            keep_in = [(src, sock_name) for src, sock_name in keep_in if sock_name not in handled]
+            keep_in = [kept for kept in keep_in if kept[1] not in handled]
     for n in own:
         tree.nodes.remove(n)
     out = active_output(tree)
@@ -164,10 +165,16 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
     stamp(node, "shader")
     if old is None:  # a first build: the material shows the layered shader
         tree.links.new(find_socket(node.outputs, "BSDF"), out.inputs["Surface"])
-    for from_socket, sock_name in keep_in:
+    for k, (from_socket, sock_name, (spec, units)) in enumerate(keep_in):
         target = find_socket(node.inputs, sock_name)
-        if target is not None:
+        if target is None:
+            continue
+        new_units = held_units(node, spec, target) if spec is not None else units
+        if new_units == units:
             tree.links.new(from_socket, target)
+        else:  # a link into a socket of other units (an exponent into a Roughness): converted on the way
+            link_converted(tree, from_socket, target, units, new_units, parent=parent,
+                           location=(node.location[0] - 380, node.location[1] - 40 * k))
     for sock_name, to_socket in keep_out:
         source = find_socket(node.outputs, sock_name)
         if source is not None:

@@ -12,14 +12,20 @@ from ..backends import node_group as node_group_builder
 from ..backends.osl_shader import SOCKET_NAMES
 from ..model import ops_numpy
 from ..model.params import (BASE_COLOR_SOCKET, LayeredParams, ParameterError, group_socket_name,
-                            iter_sockets)
+                            iter_sockets, socket_name, socket_units)
+from ..model.shading.inputs import parameter_value
+from ..model.socket_units import to_socket
 from .stored_keys import BASE_CHANNELS
 
 # The node group's socket names and the OSL shader's, either way round; a float parameter's
-# socket in the group ("Thickness Min") and in the OSL shader and older groups ("d_min").
+# socket in the group ("Thickness Min", "Upper Roughness") and in the OSL shader ("d_min",
+# "upper_roughness"); the names of older versions ("e0", "Upper Exponent", "Tilt (°)") lead to the group's.
 _SOCKET_ALIASES = {k: v for k, v in SOCKET_NAMES.items() if k != v}
-_SOCKET_ALIASES.update({spec.name: group_socket_name(spec) for spec in iter_sockets() if spec.component is None})
+_SOCKET_ALIASES.update({socket_name(spec): group_socket_name(spec) for spec in iter_sockets()
+                        if spec.component is None})
 _SOCKET_ALIASES.update({v: k for k, v in list(_SOCKET_ALIASES.items())})
+_SOCKET_ALIASES.update({old: group_socket_name(spec) for spec in iter_sockets() if spec.component is None
+                        for old in (spec.name, *spec.legacy_labels) if old != socket_name(spec)})
 
 
 def find_socket(sockets, name):
@@ -42,11 +48,30 @@ def param_socket(node, name: str):
     if spec.component is not None and has_channel_sockets(node):
         return None, None  # an older node's "Base Color" is its tint, not this channel
     label = group_socket_name(spec)
-    for candidate in (label, SOCKET_NAMES.get(label, "")):
+    for candidate in (label, SOCKET_NAMES.get(label, ""), socket_name(spec), *spec.legacy_labels):
         sock = node.inputs.get(candidate)
         if sock is not None:
             return sock, spec.component
     return None, None
+
+
+def held_units(node, spec, sock) -> str:
+    """What ``sock``, the add-on's node's socket of ``spec``, holds (:mod:`..model.socket_units`): a
+    socket under this version's name holds its backend's units (the group's Roughness, its angles in
+    radians), one under an older name ("e0", "Upper Exponent", "Tilt (°)") the parameter's."""
+    if node.bl_idname == "ShaderNodeGroup":
+        return socket_units(spec, "nodes") if sock.name == group_socket_name(spec) else ""
+    # A script node's socket shows the parameter's label; its identifier is the parameter's name.
+    return socket_units(spec, "osl") if sock.identifier == socket_name(spec) else ""
+
+
+def socket_parameter(node, sock):
+    """``(spec, units)`` of the float parameter that ``sock``, an input of the add-on's node, holds,
+    or ``(None, "")``."""
+    for spec in iter_sockets():
+        if spec.component is None and param_socket(node, spec.name)[0] == sock:
+            return spec, held_units(node, spec, sock)
+    return None, ""
 
 
 def has_channel_sockets(node) -> bool:
@@ -111,7 +136,7 @@ def set_inputs(node, params: LayeredParams) -> None:
                                  "load a preset to repair it")
         value = float(getattr(params, spec.name))
         if channel is None:
-            sock.default_value = value
+            sock.default_value = to_socket(held_units(node, spec, sock), value)
         else:
             colour = list(sock.default_value)
             colour[channel] = value
@@ -122,6 +147,11 @@ def input_value(node, name: str) -> float:
     """The value of parameter ``name`` in the shader node's sockets (an older node's base colour
     times its tint, as it rendered)."""
     sock, channel = param_socket(node, name)
+    if channel is None:
+        spec = LayeredParams.spec(name)
+        units = held_units(node, spec, sock)
+        if units:  # the parameter's value as the shader takes it from the socket
+            return float(parameter_value(ops_numpy, spec, units, float(sock.default_value)))
     value = float(sock.default_value if channel is None else sock.default_value[channel])
     tint = legacy_tint(node) if name in BASE_CHANNELS else None
     if tint is not None and not tint.is_linked:

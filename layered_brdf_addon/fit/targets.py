@@ -14,7 +14,7 @@ import numpy as np
 
 from ..model import program
 from ..model.ops_numpy import NoiseUnavailable, ShadingPoint
-from ..model.params import LayeredParams
+from ..model.params import LayeredParams, socket_values
 from ..model.plan import EffectPlan
 from ..model.policy import plan_effects
 from ..model.sphere import OrthoCamera, Sun, sphere_geometry
@@ -322,7 +322,7 @@ def shade_film(points: dict, values: dict, plan: EffectPlan, noise_at=NOISE_MEDI
     see-through), in one run of the program for the stacked ``values``.  ``noise_at``: the
     noise's value where the thickness is a noise pattern, which numpy does not evaluate (its
     median; a column of levels makes a stack of its own, one row per level, for one set)."""
-    pt = ShadingPoint(values, points["n0"], points["v"], points["p_object"])
+    pt = ShadingPoint(socket_values(values, ShadingPoint.SOCKETS), points["n0"], points["v"], points["p_object"])
     P = program.clamped_inputs(pt)
     if plan.thickness == "noise":
         u = np.broadcast_to(noise_at, np.broadcast_shapes(np.shape(noise_at), (len(points["n0"]),)))

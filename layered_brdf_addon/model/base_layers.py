@@ -15,11 +15,11 @@ bpy-free: the Blender layer builds the node from :func:`base_node`.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from .params import LayeredParams
+from .socket_units import ROUGHNESS, to_socket
 
 
 @dataclass(frozen=True)
@@ -33,9 +33,9 @@ class BaseNode:
 
 def phong_to_roughness(e: float) -> float:
     """The Roughness of a Cycles microfacet node (``sqrt(alpha)``) whose lobe about the mirror
-    direction is as wide as a Phong lobe of exponent ``e``: Beckmann ``alpha = sqrt(2 / (4 e + 2))``
-    (the half-vector exponent is about four times the mirror one)."""
-    return math.sqrt(math.sqrt(2.0 / (4.0 * max(e, 0.0) + 2.0)))
+    direction is as wide as a Phong lobe of exponent ``e``: the Upper Roughness socket's value
+    (:mod:`.socket_units`, Beckmann ``alpha = sqrt(2 / (4 e + 2))``)."""
+    return float(to_socket(ROUGHNESS, max(e, 0.0)))
 
 
 def base_node(params: LayeredParams) -> BaseNode | None:

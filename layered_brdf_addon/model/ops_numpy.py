@@ -209,6 +209,8 @@ class ShadingPoint:
     object's 3x3 linear part (object to world), identity by default.
     """
 
+    SOCKETS = "osl"  # the inputs are socket values as the OSL shader's (params.socket_units)
+
     def __init__(self, inputs, normal, incoming, p_object, matrix=None, normal_input=(0.0, 0.0, 0.0)):
         self.inputs = dict(inputs)
         self.normal = vec(normal)

@@ -19,6 +19,7 @@ from typing import Any, Iterator, Mapping
 
 from .errors import ParameterError
 from .media import MEDIA, lower_medium_values, media_names
+from .socket_units import ROUGHNESS, UNITS, socket_range, socket_units_of, to_socket
 
 # Representative wavelengths of the R, G and B channels, in nanometres (SPEC).
 WAVELENGTHS_NM = (645.0, 525.0, 445.0)
@@ -45,6 +46,9 @@ class ParamSpec:
     subtype: str = "NONE"  # the socket's Blender subtype: "WAVELENGTH" (nm), "FACTOR" (0-1 slider)
     component: int | None = None  # the parameter's channel of a colour socket
     added: str = ""  # what brought the parameter in after the first version (older files lack its socket)
+    socket_units: str = ""  # what the socket holds instead of the value (socket_units.py): "roughness"
+    socket_description: str = ""  # the socket's tooltip when it holds something else than the parameter
+    legacy_labels: tuple[str, ...] = ()  # the node group's names of the socket in older versions (parameter units)
 
     @property
     def allowed(self) -> str:
@@ -83,12 +87,15 @@ def _fmt(x: float) -> str:
 
 
 def _p(default, label, description, *, unit="", range=(-math.inf, math.inf), soft=None,
-       options=(), socket=True, group="Layer", socket_label="", subtype="NONE", component=None, added=""):
+       options=(), socket=True, group="Layer", socket_label="", subtype="NONE", component=None, added="",
+       socket_units="", socket_description="", legacy_labels=()):
     kind = "enum" if options else ("bool" if isinstance(default, bool) else "float")
+    assert socket_units in UNITS and (subtype == "ANGLE") <= (unit == "deg")
     meta = dict(label=label, description=description, unit=unit, min=range[0], max=range[1],
                 soft_min=None if soft is None else soft[0], soft_max=None if soft is None else soft[1],
                 options=tuple(options), socket=socket and kind == "float", group=group, kind=kind,
-                socket_label=socket_label, subtype=subtype, component=component, added=added)
+                socket_label=socket_label, subtype=subtype, component=component, added=added,
+                socket_units=socket_units, socket_description=socket_description, legacy_labels=tuple(legacy_labels))
     return field(default=default, metadata={"layered": meta})
 
 
@@ -171,9 +178,11 @@ class LayeredParams:
                           "Lower boundary normal: 'parallel', constant 'tilted', or 'correlated' with the thickness gradient",
                           options=NORMAL_MODES)
     tilt: float = _p(0.0, "Tilt", "Angle between the lower and upper boundary normals", unit="deg",
-                     range=(0.0, 180.0), soft=(0.0, 30.0), group="Lower boundary", socket_label="Tilt (°)")
+                     range=(0.0, 180.0), soft=(0.0, 30.0), group="Lower boundary", socket_label="Tilt",
+                     subtype="ANGLE", legacy_labels=("Tilt (°)",))
     tilt_azimuth: float = _p(0.0, "Tilt azimuth", "Rotation of the tilt axis about the normal", unit="deg",
-                             range=(-360.0, 360.0), group="Lower boundary", socket_label="Tilt Azimuth (°)")
+                             range=(-360.0, 360.0), group="Lower boundary", socket_label="Tilt Azimuth",
+                             subtype="ANGLE", legacy_labels=("Tilt Azimuth (°)",))
     bump_strength: float = _p(5.0e-4, "Bump strength",
                               "How far the lower normal bends per unit of thickness gradient (object units)",
                               unit="1/nm", range=(0.0, 1.0e3), soft=(0.0, 0.01), group="Lower boundary",
@@ -211,9 +220,17 @@ class LayeredParams:
                      added=PHYSICAL_OPTICS)
     # --- specular and diffuse --------------------------------------------
     e0: float = _p(90.0, "Upper exponent", "Phong exponent of the upper boundary (higher is sharper)",
-                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular", socket_label="Upper Exponent")
+                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular", socket_label="Upper Roughness",
+                   subtype="FACTOR", socket_units=ROUGHNESS, legacy_labels=("Upper Exponent",),
+                   socket_description="Roughness of the layer's top surface, as the Principled BSDF's: 0 a mirror "
+                   "(the sharpest the model allows, Roughness 0.047), 1 fully rough. It sets the Phong exponent "
+                   "e0 = (Roughness^-4 - 1) / 2")
     e1: float = _p(170.0, "Lower exponent", "Phong exponent of the lower boundary, inside the layer",
-                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular", socket_label="Lower Exponent")
+                   range=(0.0, 1.0e5), soft=(1.0, 2000.0), group="Specular", socket_label="Lower Roughness",
+                   subtype="FACTOR", socket_units=ROUGHNESS, legacy_labels=("Lower Exponent",),
+                   socket_description="Roughness of the layer's lower boundary, as the Principled BSDF's, seen inside "
+                   "the layer (from outside its lobe is sharper by the layer's index squared). It sets the Phong "
+                   "exponent e1 = (Roughness^-4 - 1) / 2")
     ks: float = _p(1.0, "Specular weight", "Weight of the specular (Phong-like) part",
                    range=(0.0, 1.0), group="Specular", socket_label="Specular Weight", subtype="FACTOR")
     kd: float = _p(0.7, "Diffuse weight", "Weight of the diffuse part", range=(0.0, 1.0), group="Diffuse",
@@ -315,8 +332,40 @@ def iter_sockets() -> Iterator[ParamSpec]:
 
 
 def socket_name(spec: ParamSpec) -> str:
-    """Name of the OSL shader's parameter of a parameter (an identifier)."""
-    return spec.name
+    """Name of the OSL shader's parameter of a parameter (an identifier): the parameter's name, or
+    the socket's label as an identifier when the socket holds something else ("upper_roughness")."""
+    return spec.socket_label.lower().replace(" ", "_") if spec.socket_units else spec.name
+
+
+socket_units = socket_units_of  # what a backend's socket of a parameter holds (socket_units.py)
+
+
+def socket_values(values: Mapping[str, Any], backend: str = "osl") -> dict:
+    """``values`` (parameter values by name, numbers or numpy arrays) as ``backend``'s sockets hold
+    them; entries that are not shader inputs pass through."""
+    out = dict(values)
+    for spec in PARAM_SPECS:
+        if spec.socket and spec.name in out:
+            out[spec.name] = to_socket(socket_units(spec, backend), out[spec.name])
+    return out
+
+
+def socket_default(spec: ParamSpec, backend: str) -> float:
+    """The default value of ``backend``'s socket of ``spec``."""
+    return to_socket(socket_units(spec, backend), spec.default)
+
+
+def socket_limits(spec: ParamSpec, backend: str) -> tuple[float, float]:
+    """The range of ``backend``'s socket of ``spec`` (the shader clamps its value to it)."""
+    return socket_range(socket_units(spec, backend), spec.min, spec.max)
+
+
+def socket_tooltip(spec: ParamSpec) -> str:
+    """The tooltip of a parameter's socket: what it holds and its allowed range."""
+    if spec.socket_units == ROUGHNESS:
+        return f"{spec.socket_description}. A number in [0, 1]"
+    unit = f" ({spec.unit})" if spec.unit else ""
+    return f"{spec.description}{unit}. {spec.allowed[0].upper()}{spec.allowed[1:]}"
 
 
 def group_socket_name(spec: ParamSpec) -> str:

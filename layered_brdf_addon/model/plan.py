@@ -8,7 +8,6 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 
-
 @dataclass(frozen=True)
 class EffectPlan:
     specular: bool = True  # ks > 0
@@ -46,6 +45,24 @@ class EffectPlan:
         if self.optics == "physical":
             parts.append(("T2" if self.multibeam else "T") + ("" if self.passes else "o"))
         return "".join(parts)
+
+    @property
+    def title(self) -> str:
+        """What the plan simulates, for people: "Physical film, analytic colour, noise thickness"."""
+        optics = "Physical film" if self.optics == "physical" else "Paper film"
+        colour = (f"{self.spectral} wavelengths" if self.spectral else
+                  "analytic colour" if self.analytic else "RGB colour")
+        thickness = {"noise": "noise thickness", "height": "height thickness",
+                     "constant": "even thickness"}[self.thickness]
+        normals = {"parallel": "", "tilted": ", tilted boundary", "correlated": ", boundary follows thickness"}
+        parts = [f"{optics}, {colour}, {thickness}{normals[self.normals]}"]
+        if not self.specular:
+            parts.append("diffuse only")
+        elif not self.diffuse:
+            parts.append("specular only")
+        if self.lobe == "phong":
+            parts.append("Phong lobes")
+        return ", ".join(parts)
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -13,7 +13,7 @@ import numpy as np
 from . import program
 from .geometry import Z_AXIS, dot, safe_normalize
 from .ops_numpy import NoiseUnavailable, ShadingPoint
-from .params import LayeredParams, iter_sockets
+from .params import LayeredParams, iter_sockets, socket_values
 from .policy import plan_effects
 
 
@@ -106,7 +106,7 @@ def sphere_geometry(camera: OrthoCamera, centers=((0.0, 0.0, 0.0),), radius: flo
 def shading_point(params: LayeredParams, n0, p_object, view=(0.0, 0.0, 1.0), matrix=None) -> ShadingPoint:
     """numpy ops at points of normal ``n0`` and object-space position ``p_object``, with the
     parameters' values as the shader's inputs (the node group's and OSL's socket values)."""
-    inputs = {spec.name: getattr(params, spec.name) for spec in iter_sockets()}
+    inputs = socket_values({spec.name: getattr(params, spec.name) for spec in iter_sockets()}, ShadingPoint.SOCKETS)
     return ShadingPoint(inputs, n0, view, p_object, matrix)
 
 

@@ -3,7 +3,8 @@ the per-parameter values grouped as the program's shading takes them.
 """
 from __future__ import annotations
 
-from ..params import iter_sockets
+from ..params import iter_sockets, socket_units
+from ..socket_units import ROUGHNESS, from_socket, socket_range
 from .step import shader_function
 
 FLOAT_LIMIT = 1.0e38  # an infinite component of a direction input counts as this
@@ -26,11 +27,26 @@ def direction_input(ops, v):
     return ops.combine(xs, ys, zs) * (valid / largest)
 
 
+def parameter_value(ops, spec, units, x):
+    """A parameter's value from ``x``, the value of a socket holding ``units`` (:mod:`..socket_units`),
+    within the parameter's range: ``x`` clamped to the socket's range (a texture or a driver may feed
+    any value; a NaN is the lower bound), then turned into the parameter's units where the socket
+    holds something else (a Roughness, an angle in radians), and held to the parameter's largest value."""
+    lo, hi = socket_range(units, spec.min, spec.max)
+    x = ops.clamp_input(x, lo, hi)
+    if units == ROUGHNESS:
+        return ops.minimum(from_socket(ops, units, x), spec.max)
+    return from_socket(ops, units, x)
+
+
+def parameter_input(ops, spec):
+    """A parameter's value from its socket on the backend of ``ops`` (:func:`parameter_value`)."""
+    return parameter_value(ops, spec, socket_units(spec, getattr(ops, "SOCKETS", "osl")), ops.input(spec.name))
+
+
 def clamped_inputs(ops):
-    """Every shader input, clamped to its parameter's allowed range (a texture or a driver
-    may feed any value)."""
-    return {spec.name: ops.named(f"{spec.name}_c", ops.clamp_input(ops.input(spec.name), spec.min, spec.max))
-            for spec in iter_sockets()}
+    """Every shader input in its parameter's units and range (:func:`parameter_input`)."""
+    return {spec.name: ops.named(f"{spec.name}_c", parameter_input(ops, spec)) for spec in iter_sockets()}
 
 
 def program_inputs(P):
