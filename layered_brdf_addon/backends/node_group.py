@@ -25,7 +25,7 @@ from .osl_shader import shader_source
 NODE_GROUP_VERSION = 6  # 6: Roughness sockets, Tilt as an angle; 5: sockets named for people, in panels
 GROUP_PREFIX = "Layered BRDF"
 STAMP_KEY = "layered_brdf_version"
-OPEN_PANELS = ("Layer", "Specular", "Diffuse")  # open on a new node; Noise and Lower boundary start closed
+OPEN_PANELS = ("Layer", "Specular", "Diffuse")  # open on a new node; the others start closed
 PLAN_KEY = "layered_brdf_plan"
 
 
@@ -33,9 +33,9 @@ def stamp_plans() -> list[EffectPlan]:
     """Plans that together take every branch of the shading program: the full plan, and each
     of its settings changed one at a time (with thin-film optics for the physical-only ones)."""
     base = EffectPlan.full().to_dict()
-    variants = {"specular": [False], "diffuse": [False], "thickness": ["height", "constant"],
+    variants = {"specular": [False], "diffuse": [False], "thickness": ["height", "constant", "input"],
                 "normals": ["parallel", "tilted"], "dispersion": [False], "interference": [False],
-                "analytic": [True], "spectral": [4, 8, 16, 32], "optics": ["physical"]}
+                "analytic": [True], "spectral": [4, 8, 16, 32], "optics": ["physical"], "index": ["ior"]}
     plans = [EffectPlan(**base)]
     plans += [EffectPlan(**{**base, key: value}) for key, values in variants.items() for value in values]
     physical = {**base, "optics": "physical"}
@@ -129,6 +129,11 @@ def _interface(group):
     s = iface.new_socket("Normal", in_out="INPUT", socket_type="NodeSocketVector")
     s.hide_value = True
     s.description = "Upper-boundary normal; the shading normal when not connected"
+    s = iface.new_socket(P_.THICKNESS_SOCKET, in_out="INPUT", socket_type="NodeSocketFloat")
+    s.subtype = "WAVELENGTH"
+    s.default_value = -1.0  # not linked: the pattern (a group built for a link reads Thickness Min)
+    s.hide_value = True
+    s.description = P_.THICKNESS_DESCRIPTION
     panels = {}
     for sock in P_.iter_group_sockets():
         panel = panels.get(sock.group)
@@ -171,6 +176,8 @@ class GroupOps(NodeOps):
     def input(self, name):
         if name == "Normal":
             return Expr(self, self.gin.outputs[name], "vector", 0)
+        if name == P_.THICKNESS_SOCKET:
+            return Expr(self, self.gin.outputs[name], "float", 0)
         spec = P_.LayeredParams.spec(name)
         socket = self.gin.outputs[P_.group_socket_name(spec)]
         if spec.component is None:
@@ -203,6 +210,13 @@ class GroupOps(NodeOps):
 
     def world_to_object(self, vec):
         return self._transform(vec, "WORLD", "OBJECT")
+
+    def bump_normal(self, n, height, distance):
+        """Blender's Bump node, inverted: ``n`` tilted by ``distance`` times the height's surface
+        gradient (Cycles differentiates the height's nodes; EEVEE takes screen-space derivatives)."""
+        node, dd = self.node("ShaderNodeBump", {"Strength": 1.0, "Distance": distance, "Height": height,
+                                                "Normal": n}, invert=True)
+        return self.out(node, dd, "Normal", "vector")
 
     def noise_fbm(self, p, w, scale, detail, roughness):
         n, dd = self.node("ShaderNodeTexNoise", {"Vector": p, "W": w, "Scale": scale, "Detail": detail,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import functools
 
 from ..model import program
-from ..model.params import (BASE_COLOR_DESCRIPTION, LayeredParams, group_socket_name, iter_group_sockets,
+from ..model.params import (BASE_COLOR_DESCRIPTION, THICKNESS_DESCRIPTION, THICKNESS_SOCKET, LayeredParams, group_socket_name, iter_group_sockets,
                             iter_sockets, socket_default, socket_limits, socket_name)
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
@@ -23,6 +23,7 @@ SHADER_NAME = "layered_brdf"
 
 # Shader parameters and outputs besides the material's parameters (OSL names have no spaces;
 # the node group's sockets are "Base Color", "Base Shader", "Lower Normal", "Upper Normal").
+THICKNESS_INPUT = "ThicknessIn"  # the OSL name of the Thickness input (Thickness is the output's)
 SOCKET_NAMES = {"Base Color": "BaseColor", "Base Shader": "Base", "Lower Normal": "LowerNormal",
                 "Upper Normal": "UpperNormal", "Normal": "Normal", "BSDF": "BSDF", "Thickness": "Thickness"}
 
@@ -126,6 +127,20 @@ float thickness_noise(vector p, float w, float scale, float detail, float roughn
   vector ps = p * scale;
   return noise_fbm(vector4(ps[0], ps[1], ps[2], w * scale), detail, roughness, 2.0, 1);
 }
+
+/* Blender's Bump node, inverted (node_bump.osl): n tilted by `distance` times the surface
+ * gradient of the height h, from h's screen-space derivatives; a height without derivatives
+ * (a constant) leaves n as it is. */
+vector bump_normal(vector n, float h, float distance)
+{
+  vector dPdx = Dx(P);
+  vector dPdy = Dy(P);
+  vector Rx = cross(dPdy, n);
+  vector Ry = cross(n, dPdx);
+  float det = dot(dPdx, Rx);
+  vector surfgrad = Dx(h) * Rx + Dy(h) * Ry;
+  return safe_normalize_or(fabs(det) * n + distance * sign(det) * surfgrad, n);
+}
 """
 
 GLOSSY = {
@@ -159,6 +174,8 @@ class ShaderOps(OslOps):
     def input(self, name):
         if name == "Normal":
             return self.atom(name, "vector")
+        if name == THICKNESS_SOCKET:
+            return self.atom(THICKNESS_INPUT, "float")
         spec = LayeredParams.spec(name)
         if spec.component is not None:  # a channel of a colour parameter
             return self.atom(f"{SOCKET_NAMES[group_socket_name(spec)]}[{spec.component}]", "float")
@@ -182,9 +199,14 @@ class ShaderOps(OslOps):
     def noise_fbm(self, p, w, scale, detail, roughness):
         return self.call_expr("thickness_noise", (p, w, scale, detail, roughness), "float")
 
+    def bump_normal(self, n, height, distance):
+        return self.call_expr("bump_normal", (n, height, distance), "vector")
+
 
 def _parameter_lines() -> list[str]:
-    lines = ["normal Normal = N"]
+    lines = ["normal Normal = N",
+             f"float {THICKNESS_INPUT} = -1.0\n      [[ string label = \"Thickness\", "
+             f"string help = \"{THICKNESS_DESCRIPTION}\" ]]"]
     for sock in iter_group_sockets():
         if sock.is_color:
             default = ", ".join(literal(spec.default) for spec in sock.specs)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 
 from ..model.params import iter_sockets
+from ..model.policy import THICKNESS_LINKED
 from .own_nodes import shader_node
 from .sockets import find_socket, input_linked, param_socket, socket_parameter, socket_parameters
 from .unit_conversion import convert_fcurve
@@ -71,7 +72,11 @@ def animated_parameters(mat) -> set[str]:
                 key = index[1:-1]
                 sock = find_socket(node.inputs, key)
                 names.update(socket_parameters(node, sock.name) if sock is not None else [key])
-    return names & {s.name for s in iter_sockets()}
+    names &= {s.name for s in iter_sockets()}
+    thickness = find_socket(node.inputs, THICKNESS_LINKED)
+    if thickness is not None and thickness.is_linked:
+        names.add(THICKNESS_LINKED)
+    return names
 
 
 # --- keeping the artist's animation across a rebuild ---------------------------------------------

@@ -31,6 +31,8 @@ def draw_param(layout, mat, node, spec) -> None:
     """One parameter: its socket (floats) or its setting (enums), labelled with the unit, and a tooltip."""
     row = layout.row(align=True)
     text = param_label(spec)
+    if spec.used_with:  # greyed out where the material's mode does not use it
+        row.active = getattr(settings(mat), spec.used_with[0]) == spec.used_with[1]
     if spec.socket:
         sock, channel = param_socket(node, spec.name)
         if sock is None:  # a socket deleted from the node group, or a node older than the parameter

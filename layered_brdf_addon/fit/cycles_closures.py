@@ -180,10 +180,14 @@ def stacked_values(params_list: Sequence[LayeredParams]) -> dict:
     return out
 
 
-def points_shape(n0, n1, d, v) -> tuple:
+def points_shape(n0, n1, d, v, params=None) -> tuple:
     """The shape of the shading points, the vector axis left out: that of ``n0``, grown by
-    whatever the thickness, lower normal or view add (a stack's leading axis)."""
-    return np.broadcast_shapes(np.shape(n0)[:-1], np.shape(n1)[:-1], np.shape(d), np.shape(v)[:-1])
+    whatever the thickness, lower normal, view or the columns of stacked ``params`` add (a
+    stack's leading axis: a stack that differs only in the layer's index leaves the geometry
+    without it)."""
+    columns = [np.shape(x) for x in params.values() if isinstance(x, np.ndarray)] \
+        if isinstance(params, Mapping) else []
+    return np.broadcast_shapes(np.shape(n0)[:-1], np.shape(n1)[:-1], np.shape(d), np.shape(v)[:-1], *columns)
 
 
 def shade_closures(params: LayeredParams | Mapping, n0, n1, d, v, plan: EffectPlan | None = None,
@@ -192,7 +196,7 @@ def shade_closures(params: LayeredParams | Mapping, n0, n1, d, v, plan: EffectPl
 
     ``params``: a :class:`LayeredParams`, or the values of a stack of them
     (:func:`stacked_values`, with their ``plan``)."""
-    shape = points_shape(n0, n1, d, v)
+    shape = points_shape(n0, n1, d, v, params)
     n0 = np.broadcast_to(np.asarray(n0, dtype=float), shape + (3,))
     v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
     d = np.broadcast_to(np.asarray(d, dtype=float), shape)
@@ -241,6 +245,6 @@ def closure_shading(params: LayeredParams | Mapping, n0, n1, d, l, v, wavelength
     ``params`` may be the values of a stack of parameter sets (:func:`stacked_values`, with
     their ``plan``): the result then has the stack's leading axis."""
     plan = plan or plan_effects(params)
-    n0 = np.broadcast_to(np.asarray(n0, dtype=float), points_shape(n0, n1, d, v) + (3,))
+    n0 = np.broadcast_to(np.asarray(n0, dtype=float), points_shape(n0, n1, d, v, params) + (3,))
     res = shade_closures(params, n0, n1, d, v, plan, wavelengths)
     return evaluate_closures(res, n0, v, l, plan.lobe, ng)

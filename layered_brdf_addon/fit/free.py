@@ -26,7 +26,7 @@ CONTINUOUS = tuple(s.name for s in PARAM_SPECS if s.kind == "float")
 LOG_SCALED = ("d_min", "d_max", "e0", "e1", "noise_scale")
 # Where the optimiser may go, when not the parameter's soft range: oxides' indices up to 4,
 # exponents up to a mirror, thicknesses from 1 nm, a metal's index below 1.
-SEARCH_RANGE = {"r1_r": (1.0, 4.0), "r1_g": (1.0, 4.0), "r1_b": (1.0, 4.0), "e0": (1.0, 100_000.0), "e1": (1.0, 100_000.0), "d_min": (1.0, 5000.0), "d_max": (1.0, 5000.0),
+SEARCH_RANGE = {"layer_ior": (1.0, 4.0), "layer_dispersion": (0.0, 5.0), "r1_r": (1.0, 4.0), "r1_g": (1.0, 4.0), "r1_b": (1.0, 4.0), "e0": (1.0, 100_000.0), "e1": (1.0, 100_000.0), "d_min": (1.0, 5000.0), "d_max": (1.0, 5000.0),
                 "r2_r": (0.01, 10.0), "r2_g": (0.01, 10.0), "r2_b": (0.01, 10.0),
                 "k2_r": (0.0, 12.0), "k2_g": (0.0, 12.0), "k2_b": (0.0, 12.0)}
 

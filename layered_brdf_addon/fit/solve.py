@@ -202,6 +202,10 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     if uniform:
         start = start.replace(d_max=search_range("d_max")[1])
     names = check_vary((film_vary if uniform else default_vary)(start) if vary is None else vary)
+    if start.layer_index == "ior" and {"r1_r", "r1_g", "r1_b"} & set(names):
+        # The three indices are free: the fit gives them, not an IOR and a Dispersion (which
+        # bind them to a Cauchy law); they start at the IOR and Dispersion's.
+        start = start.replace(layer_index="channels")
     free = FreeParameters(names, start)
     objective = _Objective(target, free, progress, should_stop)
     lo, hi = free.bounds()

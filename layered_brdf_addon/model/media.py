@@ -13,6 +13,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from .dispersion import ior_and_dispersion
 from .errors import ParameterError
 
 PATH = Path(__file__).with_name("data") / "media.json"
@@ -93,6 +94,14 @@ def layer_index_values(name: str) -> dict[str, float]:
     """n at R, G, B of a film medium (transparent in the band): ``r1_r, r1_g, r1_b``."""
     m = _pick(name, FILM_MEDIA, "a film medium: ")
     return {"r1_r": m.n[0], "r1_g": m.n[1], "r1_b": m.n[2]}
+
+
+def layer_ior_values(name: str) -> dict:
+    """A film medium as the IOR and Dispersion sockets give it (:func:`.dispersion.ior_and_dispersion`
+    of its n at R, G, B, rounded as an artist would type them): ``layer_index, layer_ior, layer_dispersion``."""
+    m = _pick(name, FILM_MEDIA, "a film medium: ")
+    ior, dispersion = ior_and_dispersion(m.n[:3])
+    return {"layer_index": "ior", "layer_ior": round(ior, 3), "layer_dispersion": round(dispersion, 2)}
 
 
 def spectrum(name: str, wavelengths_nm) -> tuple[list[float], list[float]]:

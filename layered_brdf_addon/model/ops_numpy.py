@@ -211,8 +211,10 @@ class ShadingPoint:
 
     SOCKETS = "osl"  # the inputs are socket values as the OSL shader's (params.socket_units)
 
-    def __init__(self, inputs, normal, incoming, p_object, matrix=None, normal_input=(0.0, 0.0, 0.0)):
+    def __init__(self, inputs, normal, incoming, p_object, matrix=None, normal_input=(0.0, 0.0, 0.0),
+                 height_gradient=None):
         self.inputs = dict(inputs)
+        self.height_gradient = height_gradient
         self.normal = vec(normal)
         self.view = vec(np.broadcast_to(np.asarray(incoming, dtype=float), np.shape(normal)))
         self.p_object = vec(p_object)
@@ -237,6 +239,8 @@ class ShadingPoint:
     def input(self, name):
         if name == "Normal":
             return vec(np.broadcast_to(np.asarray(self.normal_input, dtype=float), np.shape(self.normal)))
+        if name == "Thickness" and name not in self.inputs:
+            return np.asarray(-1.0)  # not linked
         return np.asarray(self.inputs[name], dtype=float)
 
     def shading_normal(self):
@@ -257,6 +261,16 @@ class ShadingPoint:
     def noise_fbm(self, p, w, scale, detail, roughness):
         raise NoiseUnavailable("numpy does not evaluate Blender's noise: pass the render's thickness "
                                "(and lower normal) passes")
+
+    def bump_normal(self, n, height, distance):
+        """``normalize(n + distance grad_t(height))``, the tangential part of the height's gradient:
+        what Blender's Bump node (inverted) gives; the gradient is ``height_gradient`` (world space),
+        given with the points, for numpy differentiates nothing."""
+        if self.height_gradient is None:
+            raise NoiseUnavailable("numpy needs the gradient of a linked thickness (height_gradient)")
+        g = vec(np.broadcast_to(np.asarray(self.height_gradient, dtype=float), np.shape(n)))
+        g = g - n * dot(g, n)
+        return normalize(n + g * distance, n)
 
 
 def named(hint, x):

@@ -19,10 +19,9 @@ from typing import Any, Iterator, Mapping
 
 from .errors import ParameterError
 from .media import MEDIA, lower_medium_values, media_names
+from .dispersion import WAVELENGTHS_NM, abbe_indices  # the channels' wavelengths (SPEC)
 from .socket_units import ROUGHNESS, UNITS, socket_range, socket_units_of, to_socket
 
-# Representative wavelengths of the R, G and B channels, in nanometres (SPEC).
-WAVELENGTHS_NM = (645.0, 525.0, 445.0)
 
 
 @dataclass(frozen=True)
@@ -49,6 +48,7 @@ class ParamSpec:
     socket_units: str = ""  # what the socket holds instead of the value (socket_units.py): "roughness"
     socket_description: str = ""  # the socket's tooltip when it holds something else than the parameter
     legacy_labels: tuple[str, ...] = ()  # the node group's names of the socket in older versions (parameter units)
+    used_with: tuple[str, str] | tuple[()] = ()  # (enum parameter, option) under which the value is used
 
     @property
     def allowed(self) -> str:
@@ -88,14 +88,15 @@ def _fmt(x: float) -> str:
 
 def _p(default, label, description, *, unit="", range=(-math.inf, math.inf), soft=None,
        options=(), socket=True, group="Layer", socket_label="", subtype="NONE", component=None, added="",
-       socket_units="", socket_description="", legacy_labels=()):
+       socket_units="", socket_description="", legacy_labels=(), used_with=()):
     kind = "enum" if options else ("bool" if isinstance(default, bool) else "float")
     assert socket_units in UNITS and (subtype == "ANGLE") <= (unit == "deg")
     meta = dict(label=label, description=description, unit=unit, min=range[0], max=range[1],
                 soft_min=None if soft is None else soft[0], soft_max=None if soft is None else soft[1],
                 options=tuple(options), socket=socket and kind == "float", group=group, kind=kind,
                 socket_label=socket_label, subtype=subtype, component=component, added=added,
-                socket_units=socket_units, socket_description=socket_description, legacy_labels=tuple(legacy_labels))
+                socket_units=socket_units, socket_description=socket_description, legacy_labels=tuple(legacy_labels),
+                used_with=tuple(used_with))
     return field(default=default, metadata={"layered": meta})
 
 
@@ -110,12 +111,22 @@ LOWER_MEDIA = ("custom",) + media_names()
 PHYSICAL_OPTICS = "physical optics"
 # The parameters a named lower medium fills: its n and k at R, G, B.
 LOWER_MEDIUM_KEYS = ("r2_r", "r2_g", "r2_b", "k2_r", "k2_g", "k2_b")
+LAYER_INDEX_MODES = ("channels", "ior")
+EFFECTS_MODES = ("planned", "all")
+IOR_AND_DISPERSION = "ior and dispersion"  # what added the IOR and Dispersion sockets
+PER_CHANNEL = "Per-channel IOR"  # the group (node panel, sub-panel) of the paper's three indices
 ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
 
 # The node group's colour socket of the base colour (base_r, base_g, base_b), and its tooltip.
 BASE_COLOR_SOCKET = "Base Color"
 BASE_COLOR_DESCRIPTION = ("Colour of the diffuse part under the layer, and of a metal base: plug a texture here "
                           "(each channel is kept within 0-1)")
+
+# The shader's Thickness input (nm, a link's; not a parameter: it varies over the surface), and its tooltip.
+THICKNESS_SOCKET = "Thickness"
+THICKNESS_DESCRIPTION = ("Layer thickness in nm from your own nodes (a painted map, a pattern): linked, it replaces the "
+                         "thickness pattern, and where the lower boundary follows the thickness its gradient bends it; "
+                         "not linked, the pattern (Noise or Height) between Thickness Min and Max gives it")
 
 # What an artist reads for each option of the enum parameters (menus, CLI help).
 OPTION_LABELS = {
@@ -125,6 +136,8 @@ OPTION_LABELS = {
     "none": "None (your Base Shader)", "transparent": "Transparent (soap film)",
     "metal": "Metal (base colour)",
     "paper": "Paper (lower boundary a mirror)", "physical": "Physical (thin-film optics)",
+    "channels": "Per channel (the paper's three indices)", "ior": "IOR and Dispersion",
+    "planned": "Planned (fastest)", "all": "All (edit without the add-on)",
     "rgb": "RGB (the paper's 3 wavelengths)", "analytic": "Analytic spectral",
     "spectral4": "Spectral, 4 wavelengths", "spectral8": "Spectral, 8 wavelengths",
     "spectral16": "Spectral, 16 wavelengths", "spectral32": "Spectral, 32 wavelengths",
@@ -150,12 +163,26 @@ class LayeredParams:
     """
 
     # --- the layer -------------------------------------------------------
-    r1_r: float = _p(1.4, "Index R", "Refractive index of the layer at 645 nm (red)",
-                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Red)")
-    r1_g: float = _p(1.45, "Index G", "Refractive index of the layer at 525 nm (green)",
-                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Green)")
-    r1_b: float = _p(1.6, "Index B", "Refractive index of the layer at 445 nm (blue)",
-                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Blue)")
+    layer_index: str = _p("channels", "Layer index",
+                          "How the layer's refractive index is given: 'ior' (an IOR and a Dispersion, as Blender's "
+                          "glTF materials and KHR_materials_dispersion define them) or 'channels' (the paper's three "
+                          "indices at 645, 525 and 445 nm)", options=LAYER_INDEX_MODES)
+    layer_ior: float = _p(1.45, "IOR", "Refractive index of the layer at 587.6 nm (the d line, as glass catalogues "
+                          "give it)", range=(1.0, 5.0), soft=(1.0, 2.5), socket_label="IOR", used_with=("layer_index", "ior"),
+                          added=IOR_AND_DISPERSION)
+    layer_dispersion: float = _p(0.0, "Dispersion", "How much the layer's index grows towards blue: 20 / V_d, V_d the "
+                                 "Abbe number (glTF's KHR_materials_dispersion): 0 none, water 0.36, crown glass 0.31, "
+                                 "flint glass 0.55, titanium dioxide 2", range=(0.0, 10.0), soft=(0.0, 2.0),
+                                 socket_label="Dispersion", used_with=("layer_index", "ior"), added=IOR_AND_DISPERSION)
+    r1_r: float = _p(1.4, "Index R", "Refractive index of the layer at 645 nm (red), with Layer index 'channels'",
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Red)", group=PER_CHANNEL,
+                     used_with=("layer_index", "channels"))
+    r1_g: float = _p(1.45, "Index G", "Refractive index of the layer at 525 nm (green), with Layer index 'channels'",
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Green)", group=PER_CHANNEL,
+                     used_with=("layer_index", "channels"))
+    r1_b: float = _p(1.6, "Index B", "Refractive index of the layer at 445 nm (blue), with Layer index 'channels'",
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Blue)", group=PER_CHANNEL,
+                     used_with=("layer_index", "channels"))
     r0: float = _p(1.0, "Outside index", "Refractive index of the medium above the layer (air is 1)",
                    range=(0.1, 5.0), soft=(1.0, 1.5), socket_label="Outside IOR")
     d_min: float = _p(66.0, "Thickness min", "Thinnest layer thickness", unit="nm",
@@ -186,7 +213,7 @@ class LayeredParams:
     bump_strength: float = _p(5.0e-4, "Bump strength",
                               "How far the lower normal bends per unit of thickness gradient (object units)",
                               unit="1/nm", range=(0.0, 1.0e3), soft=(0.0, 0.01), group="Lower boundary",
-                              socket_label="Bump Strength (per nm)")
+                              socket_label="Bump Strength", legacy_labels=("Bump Strength (per nm)",))
     # --- what lies under the layer (physical optics) ---------------------
     optics: str = _p("paper", "Optics",
                      "How the layer's boundaries reflect: 'paper' (Granier & Heidrich: the lower boundary a perfect "
@@ -251,6 +278,11 @@ class LayeredParams:
                        "average colour instead of aliasing) or 'spectralN' (N wavelengths, r1 from a Cauchy fit, "
                        "integrated against the CIE 1931 observer under D65)",
                        options=ACCURACY_MODES, group="Accuracy")
+    effects: str = _p("planned", "Effects",
+                      "Which effects the shader contains: 'planned' (only those the values call for, the fastest "
+                      "shader; the add-on rebuilds it when an edit calls for another) or 'all' (every effect the "
+                      "modes allow stays on the node, so that any socket can be edited without the add-on, at a "
+                      "cost per sample)", options=EFFECTS_MODES, group="Accuracy")
     lobe: str = _p("beckmann", "Lobe",
                    "Closure used for the specular lobes: 'beckmann' (both backends) or 'phong' (OSL only)",
                    options=LOBES, group="Accuracy")
@@ -271,6 +303,9 @@ class LayeredParams:
         """Check every value; raise :class:`ParameterError` naming the first bad one."""
         for s in PARAM_SPECS:
             object.__setattr__(self, s.name, s.check(getattr(self, s.name)))
+        if self.layer_index == "ior":  # the three indices follow from the IOR and the Dispersion
+            for name, n in zip(("r1_r", "r1_g", "r1_b"), abbe_indices(self.layer_ior, self.layer_dispersion)):
+                object.__setattr__(self, name, min(max(n, _SPEC_BY_NAME[name].min), _SPEC_BY_NAME[name].max))
         if self.d_min > self.d_max:
             raise ParameterError("d_min", self.d_min, f"at most d_max = {self.d_max:g} nm")
         return self

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 class EffectPlan:
     specular: bool = True  # ks > 0
     diffuse: bool = True  # kd > 0
-    thickness: str = "noise"  # "noise", "height" or "constant" (d_min == d_max: no pattern to evaluate)
+    thickness: str = "noise"  # "noise", "height", "input" (the Thickness socket's link) or "constant" (d_min == d_max)
     normals: str = "parallel"  # "parallel", "tilted" or "correlated"
     dispersion: bool = True  # one transmitted lobe per channel (else one shared)
     lobe: str = "beckmann"
@@ -23,6 +23,7 @@ class EffectPlan:
     optics: str = "paper"  # "paper": the lower boundary a perfect mirror; "physical": thin-film optics
     multibeam: bool = False  # physical: the harmonics of the beams that bounce inside the layer (program.harmonic_count)
     passes: bool = True  # physical: the lower medium may pass light to the Base Shader (False: it absorbs, a metal)
+    index: str = "channels"  # the layer's index: "channels" (three sockets) or "ior" (IOR and Dispersion)
 
     @classmethod
     def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
@@ -44,6 +45,8 @@ class EffectPlan:
             parts.append("i")
         if self.optics == "physical":
             parts.append(("T2" if self.multibeam else "T") + ("" if self.passes else "o"))
+        if self.index == "ior":
+            parts.append("Ab")
         return "".join(parts)
 
     @property
@@ -52,7 +55,7 @@ class EffectPlan:
         optics = "Physical film" if self.optics == "physical" else "Paper film"
         colour = (f"{self.spectral} wavelengths" if self.spectral else
                   "analytic colour" if self.analytic else "RGB colour")
-        thickness = {"noise": "noise thickness", "height": "height thickness",
+        thickness = {"noise": "noise thickness", "height": "height thickness", "input": "thickness from a link",
                      "constant": "even thickness"}[self.thickness]
         normals = {"parallel": "", "tilted": ", tilted boundary", "correlated": ", boundary follows thickness"}
         parts = [f"{optics}, {colour}, {thickness}{normals[self.normals]}"]
@@ -72,6 +75,7 @@ class EffectPlan:
         out.append("specular lobes" if self.specular else "no specular part (ks = 0)")
         out.append("diffuse part" if self.diffuse else "no diffuse part (kd = 0)")
         out.append({"noise": "thickness from 4D noise", "height": "thickness from object height",
+                    "input": "thickness from the Thickness input's link",
                     "constant": "constant thickness (no pattern evaluated)"}[self.thickness])
         out.append({"parallel": "parallel boundaries", "tilted": "constant tilt of the lower normal",
                     "correlated": "lower normal from the thickness gradient (3 extra pattern evaluations)"}[self.normals])
@@ -86,6 +90,8 @@ class EffectPlan:
             out.append("thin-film optics: exact Fresnel at both boundaries, reflection phases"
                        + (", and the beams that bounce inside the layer (more harmonics)" if self.multibeam else "")
                        + ("" if self.passes else "; an absorbing lower medium: nothing reaches the Base Shader"))
+        if self.index == "ior":
+            out.append("the layer's indices from its IOR and Dispersion (Abbe number)")
         if self.specular:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Iterable
 
-from .params import LayeredParams, ParameterError
+from .params import LayeredParams, ParameterError, iter_sockets
 from .plan import EffectPlan
 from .shading.base_shader import CLEAR_K
 
@@ -37,6 +37,9 @@ DISPERSION_SPREAD = 0.015
 # index on a metal: TiO2 on titanium is 0.24; soap 0.02, oil on water 0.01; docs/physical-optics.md).
 MULTIBEAM_CONTRAST = 0.04
 
+#: In the animated names: the shader's Thickness input is linked (its link replaces the pattern).
+THICKNESS_LINKED = "Thickness"
+
 #: The parameters whose value decides an effect, by the effect they decide.
 DECIDING_PARAMETERS = {
     "specular": ("ks",),
@@ -44,9 +47,10 @@ DECIDING_PARAMETERS = {
     "thickness": ("d_min", "d_max"),
     "tilt": ("tilt",),
     "bump": ("bump_strength",),
-    "dispersion": ("r1_r", "r1_g", "r1_b"),
-    "interference": ("d_min", "r1_r", "r1_g", "r1_b", "r0"),
-    "multibeam": ("r1_r", "r1_g", "r1_b", "r0", "r2_r", "r2_g", "r2_b", "k2_r", "k2_g", "k2_b"),
+    "dispersion": ("r1_r", "r1_g", "r1_b", "layer_ior", "layer_dispersion"),
+    "interference": ("d_min", "r1_r", "r1_g", "r1_b", "layer_ior", "layer_dispersion", "r0"),
+    "multibeam": ("r1_r", "r1_g", "r1_b", "layer_ior", "layer_dispersion", "r0", "r2_r", "r2_g", "r2_b", "k2_r",
+                  "k2_g", "k2_b"),
     "passes": ("k2_r", "k2_g", "k2_b"),
 }
 
@@ -70,15 +74,18 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
     """The effects the shader must contain for ``p`` on every frame.
 
     ``animated``: names of parameters that may change between frames (keyframes, drivers,
-    linked sockets).  See docs/effect-planning.md.
+    linked sockets), and :data:`THICKNESS_LINKED` where the Thickness input is linked.  See docs/effect-planning.md.
     """
     animated = frozenset(animated)
+    if p.effects == "all":  # every effect stays, as if every socket could take any value
+        animated |= {spec.name for spec in iter_sockets()}
 
     def moving(effect: str) -> bool:
         return any(n in animated for n in DECIDING_PARAMETERS[effect])
 
-    varying = p.d_min != p.d_max or moving("thickness")
-    thickness = p.thickness_mode if varying else "constant"
+    linked = THICKNESS_LINKED in animated
+    varying = p.d_min != p.d_max or moving("thickness") or linked
+    thickness = "input" if linked else p.thickness_mode if varying else "constant"
     normals = p.normal_mode
     if normals == "tilted" and p.tilt == 0.0 and not moving("tilt"):
         normals = "parallel"
@@ -97,7 +104,7 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
     return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
                       thickness=thickness, normals=normals, dispersion=dispersion, lobe=p.lobe,
                       spectral=spectral, interference=interference, analytic=analytic, optics=p.optics,
-                      multibeam=multibeam, passes=passes)
+                      multibeam=multibeam, passes=passes, index=p.layer_index)
 
 
 def beam_contrast(p: LayeredParams) -> float:

@@ -4,7 +4,7 @@ Each preset is a mapping of overrides on :class:`LayeredParams` defaults.
 """
 from __future__ import annotations
 
-from .media import layer_index_values
+from .media import layer_ior_values
 from .params import LayeredParams, ParameterError
 
 PAPER_PRESETS: dict[str, dict] = {
@@ -41,30 +41,31 @@ ARTIST_PRESETS: dict[str, dict] = {
     # A soap film (water) with air on both sides: it reflects a few percent, in colours that run
     # through the interference orders as it thickens downwards; the rest passes to the transparent
     # base, so the background shows through.
-    "soap_bubble": dict(optics="physical", lower_medium="air", **layer_index_values("water"), d_min=150.0,
+    "soap_bubble": dict(optics="physical", lower_medium="air", **layer_ior_values("water"), d_min=150.0,
                         d_max=900.0, thickness_mode="height", e0=3000.0, e1=5350.0, ks=1.0, kd=0.0, base_r=0.0,
                         base_g=0.0, base_b=0.0, base_layer="transparent"),
     # An oil film on water, over a dark wet base: a wide range of thickness in large, soft swirls.
-    "oil_slick": dict(optics="physical", lower_medium="water", **layer_index_values("oil"), d_min=100.0,
+    "oil_slick": dict(optics="physical", lower_medium="water", **layer_ior_values("oil"), d_min=100.0,
                       d_max=600.0, noise_scale=1.2, noise_detail=3.0, e0=1500.0, e1=3210.0, ks=1.0, kd=0.3,
                       base_r=0.01, base_g=0.01, base_b=0.012),
     # A jewel beetle's cuticle: a chitin-like film over air (the cuticle's lamellae), thick enough
     # for second-order green, over a dark, melanised base.
-    "beetle_shell": dict(optics="physical", lower_medium="air", **layer_index_values("chitin"), d_min=250.0,
+    "beetle_shell": dict(optics="physical", lower_medium="air", **layer_ior_values("chitin"), d_min=250.0,
                          d_max=290.0, e0=800.0, e1=1960.0, ks=1.0, kd=0.3, base_r=0.01, base_g=0.02,
                          base_b=0.015),
     # Anodised titanium: amorphous TiO2 on titanium (the metal is the film's lower boundary), the
     # anodising sequence from gold (thinnest) through purple to blue.
-    "anodised_titanium": dict(optics="physical", lower_medium="titanium", **layer_index_values("tio2_amorphous"),
+    "anodised_titanium": dict(optics="physical", lower_medium="titanium", **layer_ior_values("tio2_amorphous"),
                               d_min=25.0, d_max=75.0, noise_scale=1.2, e0=800.0, e1=4860.0, ks=1.0, kd=0.0,
                               base_layer="metal", base_r=0.22, base_g=0.21, base_b=0.2),
     # Copper (bronze) under patchy oxide films of high index (cuprite-like, 2.4-2.7), 0-120 nm.
-    "old_metal": dict(optics="physical", lower_medium="copper", r1_r=2.4, r1_g=2.5, r1_b=2.7, d_min=0.0,
+    "old_metal": dict(optics="physical", lower_medium="copper", layer_index="ior", layer_ior=2.44,
+                      layer_dispersion=3.0, d_min=0.0,
                       d_max=120.0, noise_scale=3.0, noise_detail=3.0, noise_roughness=0.6, e0=200.0, e1=1250.0,
                       ks=1.0, kd=0.0, base_layer="metal", base_r=0.45, base_g=0.3, base_b=0.15),
     # Terracotta under a thin glassy glaze (BK7-like) over an alumina-rich body: the glaze warms the
     # body and tints the reflections.
-    "glazed_clay": dict(optics="physical", lower_medium="alumina", **layer_index_values("glass"), d_min=60.0,
+    "glazed_clay": dict(optics="physical", lower_medium="alumina", **layer_ior_values("glass"), d_min=60.0,
                         d_max=95.0, noise_scale=2.0, e0=1500.0, e1=3470.0, ks=1.0, kd=0.4, base_r=0.5,
                         base_g=0.2, base_b=0.1),
 }

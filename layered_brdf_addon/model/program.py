@@ -125,7 +125,7 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
     ``upper_normal`` (world space) and ``base_weight`` (the factor of the Base Shader input).
     """
     with ops.stage("Inputs, each kept within its range; the upper normal n0"):
-        P = clamped_inputs(ops)
+        P = clamped_inputs(ops, plan)
         # A zero-length or NaN Normal input (unconnected, or a broken texture) falls back to
         # the shading normal.
         n0 = ops.normalize(direction_input(ops, ops.input("Normal")), ops.shading_normal())

@@ -3,11 +3,13 @@ the per-parameter values grouped as the program's shading takes them.
 """
 from __future__ import annotations
 
-from ..params import iter_sockets, socket_units
+from ..dispersion import WAVELENGTHS_NM, abbe_index
+from ..params import LayeredParams, iter_sockets, socket_units
 from ..socket_units import ROUGHNESS, from_socket, socket_range
 from .step import shader_function
 
 FLOAT_LIMIT = 1.0e38  # an infinite component of a direction input counts as this
+R1_RANGE = (LayeredParams.spec("r1_r").min, LayeredParams.spec("r1_r").max)  # the layer's indices' range
 
 
 @shader_function
@@ -44,9 +46,29 @@ def parameter_input(ops, spec):
     return parameter_value(ops, spec, socket_units(spec, getattr(ops, "SOCKETS", "osl")), ops.input(spec.name))
 
 
-def clamped_inputs(ops):
-    """Every shader input in its parameter's units and range (:func:`parameter_input`)."""
-    return {spec.name: ops.named(f"{spec.name}_c", parameter_input(ops, spec)) for spec in iter_sockets()}
+def clamped_inputs(ops, plan=None):
+    """Every shader input in its parameter's units and range (:func:`parameter_input`); with a
+    ``plan`` whose layer index is "ior", the three indices ``r1_r, r1_g, r1_b`` are the IOR and
+    Dispersion's (:func:`layer_indices`), not their sockets'."""
+    P = {spec.name: ops.named(f"{spec.name}_c", parameter_input(ops, spec)) for spec in iter_sockets()
+         if plan is None or plan.index != "ior" or not spec.name.startswith("r1_")}
+    if plan is not None and plan.index == "ior":
+        P.update(zip(("r1_r", "r1_g", "r1_b"), layer_indices(ops, P["layer_ior"], P["layer_dispersion"])))
+    return P
+
+
+@shader_function
+def layer_index_at(ops, ior, dispersion, wavelength_nm):
+    """The layer's index at ``wavelength_nm`` from its IOR (at the d line, 587.6 nm) and its
+    Dispersion (20 / V_d, V_d the Abbe number), as glTF's KHR_materials_dispersion defines them,
+    within the indices' range."""
+    return ops.clamp(abbe_index(ior, dispersion, wavelength_nm), R1_RANGE[0], R1_RANGE[1])
+
+
+def layer_indices(ops, ior, dispersion):
+    """The layer's indices at the R, G and B channels' wavelengths (:func:`layer_index_at`)."""
+    return tuple(ops.named(f"r1_{c}_c", layer_index_at(ops, ior, dispersion, lam))
+                 for c, lam in zip("rgb", WAVELENGTHS_NM))
 
 
 def program_inputs(P):
@@ -54,3 +76,4 @@ def program_inputs(P):
     return dict(r1=(P["r1_r"], P["r1_g"], P["r1_b"]), r0=P["r0"], e0=P["e0"], e1=P["e1"], ks=P["ks"], kd=P["kd"],
                 base=(P["base_r"], P["base_g"], P["base_b"]), r2=(P["r2_r"], P["r2_g"], P["r2_b"]),
                 k2=(P["k2_r"], P["k2_g"], P["k2_b"]))
+

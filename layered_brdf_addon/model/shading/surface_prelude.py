@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+from ..params import THICKNESS_SOCKET
 from ..plan import EffectPlan
 from .step import shader_function
 
@@ -86,11 +87,25 @@ def pattern_inputs(P):
     return (P["d_min"], P["d_max"], P["noise_scale"], P["noise_detail"], P["noise_roughness"], P["noise_phase"])
 
 
+@shader_function
+def linked_thickness(ops, t, otherwise):
+    """The Thickness input's ``t`` (nm) within [0, D_LIMIT] (a NaN is 0), or ``otherwise`` where
+    ``t`` is negative: the socket's own value, -1, where nothing is linked (a constant there, so
+    Cycles folds the choice away and only ``otherwise`` is evaluated)."""
+    return ops.select(ops.lt(t, 0.0), otherwise, ops.clamp_input(t, 0.0, D_LIMIT))
+
+
 def layer_thickness(ops, P, p_obj, plan: EffectPlan):
-    """Thickness ``d`` (nm) at the object-space position ``p_obj``."""
+    """Thickness ``d`` (nm) at the object-space position ``p_obj``: the Thickness input where it is
+    linked, else the plan's pattern.  A plan made for a link evaluates no pattern (a group made for a
+    link that lost it, without the add-on to rebuild it, renders Thickness Min); a pattern's plan
+    still takes a link made without the add-on (its lower normal keeps the pattern's gradient)."""
     if plan.thickness == "constant":
         return P["d_min"]
-    return thickness_at(ops, p_obj, *pattern_inputs(P), pattern=plan.thickness)
+    if plan.thickness == "input":
+        return linked_thickness(ops, ops.input(THICKNESS_SOCKET), P["d_min"])
+    return linked_thickness(ops, ops.input(THICKNESS_SOCKET),
+                            thickness_at(ops, p_obj, *pattern_inputs(P), pattern=plan.thickness))
 
 
 def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan):
@@ -100,6 +115,9 @@ def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan):
         up = ops.normalize(ops.object_to_world((0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
         x_axis = ops.normalize(ops.object_to_world((1.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
         return tilted_normal(ops, n0, P["tilt"], P["tilt_azimuth"], up, x_axis)
+    if plan.normals == "correlated" and plan.thickness == "input":
+        # The gradient of a linked thickness is the renderer's: Blender's Bump node on it.
+        return ops.bump_normal(n0, d, P["bump_strength"])
     if plan.normals == "correlated" and plan.thickness != "constant":
         grad = thickness_gradient(ops, p_obj, d, *pattern_inputs(P), pattern=plan.thickness)
         return correlated_normal(ops, n0, grad, P["bump_strength"])
