@@ -293,10 +293,10 @@ def test_a_deleted_group_input_is_reported_and_reapplying_the_same_preset_repair
     param_socket(shader_node(mat_b), "r0")[0].default_value = 1.25
     group = shader_node(mat_a).node_tree
     assert shader_node(mat_b).node_tree == group
-    remove_group_input(group, "Layer IOR (Red)")
+    remove_group_input(group, "IOR Red")
     for mat in (mat_a, mat_b):
         problem = material_problem(mat)
-        assert problem is not None and "'r1_r' (Layer IOR (Red))" in problem, problem
+        assert problem is not None and "'r1_r' (IOR Red)" in problem, problem
         with pytest.raises(ParameterError, match="r1_r"):
             sync_material(mat)
     assert upgrade_all() == []

@@ -124,9 +124,10 @@ BASE_COLOR_DESCRIPTION = ("Colour of the diffuse part under the layer, and of a 
 
 # The shader's Thickness input (nm, a link's; not a parameter: it varies over the surface), and its tooltip.
 THICKNESS_SOCKET = "Thickness"
-THICKNESS_DESCRIPTION = ("Layer thickness in nm from your own nodes (a painted map, a pattern): linked, it replaces the "
-                         "thickness pattern, and where the lower boundary follows the thickness its gradient bends it; "
-                         "not linked, the pattern (Noise or Height) between Thickness Min and Max gives it")
+THICKNESS_DESCRIPTION = ("Layer thickness in nm from your own nodes (a painted map, a pattern): linked, it "
+                         "replaces the thickness pattern, and where the lower boundary follows the thickness "
+                         "its gradient bends it; not linked, the pattern (Noise or Height) between Thickness Min "
+                         "and Max gives it")
 
 # What an artist reads for each option of the enum parameters (menus, CLI help).
 OPTION_LABELS = {
@@ -168,20 +169,24 @@ class LayeredParams:
                           "glTF materials and KHR_materials_dispersion define them) or 'channels' (the paper's three "
                           "indices at 645, 525 and 445 nm)", options=LAYER_INDEX_MODES)
     layer_ior: float = _p(1.45, "IOR", "Refractive index of the layer at 587.6 nm (the d line, as glass catalogues "
-                          "give it)", range=(1.0, 5.0), soft=(1.0, 2.5), socket_label="IOR", used_with=("layer_index", "ior"),
+                          "give it)", range=(1.0, 5.0), soft=(1.0, 2.5), socket_label="IOR",
+                          used_with=("layer_index", "ior"),
                           added=IOR_AND_DISPERSION)
     layer_dispersion: float = _p(0.0, "Dispersion", "How much the layer's index grows towards blue: 20 / V_d, V_d the "
                                  "Abbe number (glTF's KHR_materials_dispersion): 0 none, water 0.36, crown glass 0.31, "
                                  "flint glass 0.55, titanium dioxide 2", range=(0.0, 10.0), soft=(0.0, 2.0),
                                  socket_label="Dispersion", used_with=("layer_index", "ior"), added=IOR_AND_DISPERSION)
     r1_r: float = _p(1.4, "Index R", "Refractive index of the layer at 645 nm (red), with Layer index 'channels'",
-                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Red)", group=PER_CHANNEL,
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="IOR Red",
+                     legacy_labels=("Layer IOR (Red)",), group=PER_CHANNEL,
                      used_with=("layer_index", "channels"))
     r1_g: float = _p(1.45, "Index G", "Refractive index of the layer at 525 nm (green), with Layer index 'channels'",
-                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Green)", group=PER_CHANNEL,
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="IOR Green",
+                     legacy_labels=("Layer IOR (Green)",), group=PER_CHANNEL,
                      used_with=("layer_index", "channels"))
     r1_b: float = _p(1.6, "Index B", "Refractive index of the layer at 445 nm (blue), with Layer index 'channels'",
-                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="Layer IOR (Blue)", group=PER_CHANNEL,
+                     range=(0.1, 5.0), soft=(1.0, 2.5), socket_label="IOR Blue",
+                     legacy_labels=("Layer IOR (Blue)",), group=PER_CHANNEL,
                      used_with=("layer_index", "channels"))
     r0: float = _p(1.0, "Outside index", "Refractive index of the medium above the layer (air is 1)",
                    range=(0.1, 5.0), soft=(1.0, 1.5), socket_label="Outside IOR")
@@ -226,24 +231,27 @@ class LayeredParams:
                            group="Lower boundary")
     r2_r: float = _p(1.5, "Lower index R", "Refractive index n of the medium under the layer at 645 nm (red); "
                      "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
-                     socket_label="Lower IOR (Red)", added=PHYSICAL_OPTICS)
+                     socket_label="Lower IOR Red", legacy_labels=("Lower IOR (Red)",), added=PHYSICAL_OPTICS)
     r2_g: float = _p(1.5, "Lower index G", "Refractive index n of the medium under the layer at 525 nm (green); "
                      "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
-                     socket_label="Lower IOR (Green)", added=PHYSICAL_OPTICS)
+                     socket_label="Lower IOR Green", legacy_labels=("Lower IOR (Green)",), added=PHYSICAL_OPTICS)
     r2_b: float = _p(1.5, "Lower index B", "Refractive index n of the medium under the layer at 445 nm (blue); "
                      "physical optics only", range=(0.01, 10.0), soft=(1.0, 4.0), group="Lower boundary",
-                     socket_label="Lower IOR (Blue)", added=PHYSICAL_OPTICS)
+                     socket_label="Lower IOR Blue", legacy_labels=("Lower IOR (Blue)",), added=PHYSICAL_OPTICS)
     k2_r: float = _p(0.0, "Lower extinction R", "Extinction coefficient k of the medium under the layer at 645 nm "
                      "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
-                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Red)",
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction Red",
+                     legacy_labels=("Lower Extinction (Red)",),
                      added=PHYSICAL_OPTICS)
     k2_g: float = _p(0.0, "Lower extinction G", "Extinction coefficient k of the medium under the layer at 525 nm "
                      "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
-                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Green)",
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction Green",
+                     legacy_labels=("Lower Extinction (Green)",),
                      added=PHYSICAL_OPTICS)
     k2_b: float = _p(0.0, "Lower extinction B", "Extinction coefficient k of the medium under the layer at 445 nm "
                      "(0 for a dielectric, 1-10 for a metal); physical optics only", range=(0.0, 20.0),
-                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction (Blue)",
+                     soft=(0.0, 10.0), group="Lower boundary", socket_label="Lower Extinction Blue",
+                     legacy_labels=("Lower Extinction (Blue)",),
                      added=PHYSICAL_OPTICS)
     # --- specular and diffuse --------------------------------------------
     e0: float = _p(90.0, "Upper exponent", "Phong exponent of the upper boundary (higher is sharper)",
