@@ -11,7 +11,8 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
-from ..model.params import LayeredParams, ParameterError, ParamSpec, option_label
+from ..model.params import (LayeredParams, ParameterError, ParamSpec, group_socket_name, option_label,
+                            socket_tooltip)
 from .material_values import is_layered, params_of
 from .own_nodes import shader_node
 from .sockets import set_inputs
@@ -27,13 +28,19 @@ UNIT_LABELS = {"deg": "\u00b0"}
 
 
 def param_label(spec: ParamSpec) -> str:
-    """The label with its unit, e.g. ``Thickness min (nm)``."""
+    """The label with its unit, e.g. ``Thickness min (nm)``; a socket that holds something else than
+    the parameter (a Roughness for an exponent) is labelled as the node labels it."""
+    if spec.socket_units:
+        return group_socket_name(spec).capitalize()
     return f"{spec.label} ({UNIT_LABELS.get(spec.unit, spec.unit)})" if spec.unit else spec.label
 
 
 def param_tooltip(name: str) -> str:
-    """Description, allowed range and typical range of a parameter."""
+    """Description, allowed range and typical range of a parameter (of its socket, where the socket
+    holds something else: a Roughness)."""
     spec = LayeredParams.spec(name)
+    if spec.socket_units:
+        return socket_tooltip(spec)
     text = f"{spec.description}. Allowed: {spec.allowed}"
     if spec.soft_min is not None and spec.soft_max is not None:
         unit = f" {spec.unit}" if spec.unit else ""
