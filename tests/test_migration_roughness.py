@@ -93,4 +93,5 @@ def test_the_previous_release_opens_with_roughness_and_angle_sockets_and_renders
     after = render_passes().beauty
     mask = np.any(before[..., :3] > 0.0, axis=-1)
     ag = agreement(after[..., :3], before[..., :3], mask, rel_tol=REL_TOL)
+    print(f"migrated vs saved render: {ag}")
     assert ag.failing_fraction <= MAX_FAILING, ag
