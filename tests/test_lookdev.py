@@ -98,7 +98,8 @@ def test_principled_thin_film_equivalent_of_a_preset():
     assert kw["thickness_noise"] == (p.d_min, p.d_max, p.noise_scale, p.noise_detail, p.noise_roughness)
     soap = thin_film_equivalent("soap_bubble", preset("soap_bubble"))
     assert soap["transmission"] == 1.0 and soap["base_color"] == (1.0, 1.0, 1.0)  # else it transmits nothing
-    assert kw["roughness"] == pytest.approx(math.sqrt(math.sqrt(2.0 / (p.e0 + 2.0))))
+    # The node's Upper Roughness: alpha = Roughness^2 = sqrt(2 / (4 e0 + 2)), the lobe the shaders render.
+    assert kw["roughness"] == pytest.approx(math.sqrt(math.sqrt(2.0 / (4.0 * p.e0 + 2.0))))
     assert thin_film_equivalent("oil_slick", preset("oil_slick"))["metallic"] == 0.0
     mat = principled_thin_film("TF", **kw)
     bsdf = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")

@@ -11,7 +11,7 @@ from __future__ import annotations
 from ..backends import node_group as node_group_builder
 from ..model import policy
 from ..model.base_layers import base_node
-from ..model.params import LayeredParams, ParameterError, group_socket_name, iter_sockets
+from ..model.params import THICKNESS_SOCKET, LayeredParams, ParameterError, group_socket_name, iter_sockets
 from ..model.plan import EffectPlan
 from ..model.policy import plan_effects
 from . import osl as osl_backend
@@ -97,11 +97,13 @@ def _set_base_inputs(node, params: LayeredParams) -> None:
 
 
 def _group_lacks_sockets(group) -> bool:
-    """Whether the add-on's node group lacks a socket it builds for a parameter, or its BSDF output."""
+    """Whether the add-on's node group lacks a socket it builds for a parameter, its Thickness input or
+    its BSDF output."""
     items = [i for i in group.interface.items_tree if i.item_type == "SOCKET"]
     inputs = {i.name for i in items if i.in_out == "INPUT"}
     outputs = {i.name for i in items if i.in_out == "OUTPUT"}
-    return "BSDF" not in outputs or any(group_socket_name(s) not in inputs for s in iter_sockets())
+    return "BSDF" not in outputs or THICKNESS_SOCKET not in inputs or \
+        any(group_socket_name(s) not in inputs for s in iter_sockets())
 
 
 def _group_for(plan: EffectPlan):

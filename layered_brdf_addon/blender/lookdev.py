@@ -21,6 +21,7 @@ import bpy  # first: it makes mathutils importable
 import numpy as np
 from mathutils import Euler, Vector
 
+from ..model.base_layers import phong_to_roughness
 from ..model.params import LayeredParams, ParameterError
 from .scene import deterministic_cycles, ensure_passes, hdri_world, mesh_from_arrays
 
@@ -341,14 +342,13 @@ def principled_soap_film(name: str = "Soap film", thickness_nm: float = 500.0, i
 def thin_film_equivalent(name: str, params: LayeredParams) -> dict[str, Any]:
     """The Principled BSDF + Thin Film values nearest to a preset: the film's thickness in
     the middle of d_min..d_max, its index the green one (r1_g), the base colour, metallic
-    1 for a preset whose name says metal or titanium (else 0), and the roughness of the
-    upper Phong exponent e0 through Beckmann's alpha = sqrt(2 / (e0 + 2)) and Principled's
-    roughness = sqrt(alpha).  The keyword arguments of :func:`principled_thin_film`.
+    1 for a preset whose name says metal or titanium (else 0), and the node's Upper Roughness
+    (:func:`~..model.base_layers.phong_to_roughness` of e0: the same Roughness as Blender's
+    BSDFs take it).  The keyword arguments of :func:`principled_thin_film`.
 
     A fair baseline: a noise-driven film takes the same noise over the same range; a clear
     film (transparent base) transmits; with physical optics over a metal, the base colour is
     the metal's reflectance at normal incidence, ``((n - 1)^2 + k^2) / ((n + 1)^2 + k^2)``."""
-    alpha = math.sqrt(2.0 / (params.e0 + 2.0))
     metallic = 1.0 if any(w in name.lower() for w in METAL_WORDS) else 0.0
     colour = params.base_color
     if params.base_layer == "transparent":
@@ -356,7 +356,7 @@ def thin_film_equivalent(name: str, params: LayeredParams) -> dict[str, Any]:
     if params.optics == "physical" and metallic:
         colour = tuple(((n - 1.0) ** 2 + k * k) / ((n + 1.0) ** 2 + k * k) for n, k in zip(params.r2, params.k2))
     out = dict(thickness_nm=0.5 * (params.d_min + params.d_max), ior=params.r1_g, base_color=colour,
-               metallic=metallic, roughness=min(1.0, math.sqrt(alpha)),
+               metallic=metallic, roughness=phong_to_roughness(params.e0),
                transmission=1.0 if params.base_layer == "transparent" else 0.0)
     if params.thickness_mode == "noise" and params.d_min != params.d_max:
         out["thickness_noise"] = (params.d_min, params.d_max, params.noise_scale, params.noise_detail,

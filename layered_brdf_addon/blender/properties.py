@@ -11,11 +11,12 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
+from ..model.dispersion import ior_and_dispersion
 from ..model.params import (LayeredParams, ParameterError, ParamSpec, group_socket_name, option_label,
                             socket_tooltip)
 from .material_values import is_layered, params_of
 from .own_nodes import shader_node
-from .sockets import set_inputs
+from .sockets import input_value, set_inputs
 from .stored_keys import setting_specs
 from .sync import adopt, sync_material, updates_suspended
 
@@ -57,6 +58,12 @@ def _updater(name: str):
             return
         adopt(mat, keep=name)
         try:
+            if name == "layer_index" and self.layer_index == "ior" and shader_node(mat) is not None:
+                # The IOR and Dispersion start where the three indices were (their nearest Cauchy law).
+                node = shader_node(mat)
+                ior, dispersion = ior_and_dispersion([input_value(node, c) for c in ("r1_r", "r1_g", "r1_b")])
+                set_inputs(node, params_of(mat).replace(layer_ior=min(max(ior, 1.0), 5.0),
+                                                        layer_dispersion=min(max(dispersion, 0.0), 10.0)))
             if name == "lower_medium" and self.lower_medium != "custom" and shader_node(mat) is not None:
                 # A named medium fills the lower medium's n and k sockets.
                 set_inputs(shader_node(mat), params_of(mat).replace(lower_medium=self.lower_medium))

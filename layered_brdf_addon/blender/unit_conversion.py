@@ -15,6 +15,7 @@ from ..model import ops_numpy
 from ..model.socket_units import RADIANS, ROUGHNESS, from_socket, to_socket
 
 MAX_FRAMES = 20000  # frames of a converted curve checked (and keyed where it strays)
+DRIVER_SAMPLES = 200  # values of a driver's mapping curve checked, between its first and last keys
 CURVE_TOLERANCE = 1.0e-4  # how far a converted curve may stray from the old one, converted, on a frame
 _LABELS = {"": "value", ROUGHNESS: "roughness", RADIANS: "radians"}
 
@@ -25,13 +26,17 @@ def convert_value(old: str, new: str, x: float) -> float:
         return x
     if old == ROUGHNESS:
         x = min(max(x, 0.0), 1.0)
-    return float(to_socket(new, float(from_socket(ops_numpy, old, x))))
+    value = float(from_socket(ops_numpy, old, x))
+    if new == ROUGHNESS:  # an exponent below 0 rendered as 0 (the shader clamps it): fully rough
+        value = max(value, 0.0)
+    return float(to_socket(new, value))
 
 
 # Math node steps from a parameter's units to a socket's and back: (operation, second input, third).
 _TO_PARAMETER = {ROUGHNESS: [("MAXIMUM", 1.0e-8, None), ("POWER", -4.0, None), ("MULTIPLY_ADD", 0.5, -0.5)],
                  RADIANS: [("DEGREES", None, None)]}
-_FROM_PARAMETER = {ROUGHNESS: [("MULTIPLY_ADD", 2.0, 1.0), ("POWER", -0.25, None)], RADIANS: [("RADIANS", None, None)]}
+_FROM_PARAMETER = {ROUGHNESS: [("MAXIMUM", 0.0, None), ("MULTIPLY_ADD", 2.0, 1.0), ("POWER", -0.25, None)],
+                   RADIANS: [("RADIANS", None, None)]}
 
 
 def link_converted(tree, from_socket, to_socket_, old: str, new: str, *, location, parent=None) -> list:
@@ -61,7 +66,7 @@ def link_converted(tree, from_socket, to_socket_, old: str, new: str, *, locatio
 
 
 _WRAP = {(ROUGHNESS, ""): "0.5 * (pow(max({x}, 1e-8), -4) - 1)", (RADIANS, ""): "degrees({x})",
-         ("", ROUGHNESS): "pow(2 * ({x}) + 1, -0.25)", ("", RADIANS): "radians({x})"}
+         ("", ROUGHNESS): "pow(2 * max({x}, 0) + 1, -0.25)", ("", RADIANS): "radians({x})"}
 
 
 def _expression(driver) -> str:
@@ -104,8 +109,12 @@ def convert_fcurve(fc, old: str, new: str, is_driver: bool) -> None:
         return
     if fc.keyframe_points:  # keyframes, or a driver's curve mapping its value: convert the values
         points = fc.keyframe_points
-        first, last = int(math.floor(points[0].co[0])), int(math.ceil(points[-1].co[0]))
-        frames = range(first, min(last, first + MAX_FRAMES) + 1)
+        if is_driver:  # the curve maps the driver's value: checked at fine steps of it
+            first, last = points[0].co[0], points[-1].co[0]
+            frames = [first + (last - first) * k / DRIVER_SAMPLES for k in range(DRIVER_SAMPLES + 1)]
+        else:
+            first, last = int(math.floor(points[0].co[0])), int(math.ceil(points[-1].co[0]))
+            frames = range(first, min(last, first + MAX_FRAMES) + 1)
         wanted = {f: convert_value(old, new, fc.evaluate(f)) for f in frames}
         for point in points:
             for attr in ("co", "handle_left", "handle_right"):
@@ -122,3 +131,6 @@ def convert_fcurve(fc, old: str, new: str, is_driver: bool) -> None:
                 points.insert(f, wanted[f], options={"FAST"})
             fc.update()
         return
+    if is_driver:
+            print(f"Layered BRDF: the driver of {fc.data_path} passes its value through modifiers that cannot be "
+              f"converted from {_LABELS[old]} to {_LABELS[new]}: check it")

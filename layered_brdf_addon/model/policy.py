@@ -97,7 +97,8 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
     spectral = spectral_count(p.accuracy)
     analytic = p.accuracy == "analytic"
     banded = bool(spectral) or analytic  # colour integrated over the band, where interference can average out
-    interference = not (banded and not moving("interference") and interference_averages_out(p))
+    # A linked thickness is not Thickness Min's: interference stays.
+    interference = not (banded and not moving("interference") and not linked and interference_averages_out(p))
     physical = p.optics == "physical"
     multibeam = physical and interference and (moving("multibeam") or beam_contrast(p) > MULTIBEAM_CONTRAST)
     passes = not physical or moving("passes") or min(p.k2) < CLEAR_K

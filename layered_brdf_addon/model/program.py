@@ -52,7 +52,8 @@ from .shading.placement import exit_direction, interference_centre, layer_path, 
 from .shading.spectral_mode import merged_group_weights, shade_spectral, spectral_groups, spectral_step
 from .shading.step import shader_function
 from .shading.surface_prelude import (DEG, D_LIMIT, GRADIENT_STEP, correlated_normal, layer_thickness, lower_normal,
-                                      pattern_inputs, rotate_about, tangent_axis, thickness_at, thickness_factor,
+                                      pattern_inputs, pattern_thickness, rotate_about, tangent_axis, thickness_at,
+                                      thickness_factor,
                                       thickness_gradient, tilted_normal)
 from .shading.thin_film import (HARMONICS_MULTIBEAM, beam_sums, c_abs2, c_div, c_mul, c_sqrt, film_beams,
                                 fresnel_reflectance, harmonic_count, lower_amplitudes, optics_settings, top_amplitudes)
@@ -69,7 +70,7 @@ __all__ = [
     "film_amplitudes", "film_diffuse_rho", "lobe_amplitudes", "LOBE_PLACEMENT", "channel_block", "channel_lobes",
     "diffuse_colour", "merged_group_weights", "shade_spectral", "spectral_groups", "spectral_step", "DEG",
     "D_LIMIT", "GRADIENT_STEP", "correlated_normal", "layer_thickness", "lower_normal", "pattern_inputs",
-    "rotate_about", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient", "tilted_normal",
+    "pattern_thickness", "rotate_about", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient", "tilted_normal",
     "FLOAT_LIMIT", "clamped_inputs", "direction_input", "program_inputs", "CLEAR_K", "base_weight",
     "film_transmittance", "shade", "layered_surface",
 ]
@@ -131,10 +132,11 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
         n0 = ops.normalize(direction_input(ops, ops.input("Normal")), ops.shading_normal())
         v = ops.incoming()
         p_obj = ops.object_position()
-    with ops.stage("Layer thickness d (nm): noise or height"):
-        d = layer_thickness(ops, P, p_obj, plan)
+    with ops.stage("Layer thickness d (nm): noise, height or your Thickness input"):
+        pattern = pattern_thickness(ops, P, p_obj, plan)
+        d = layer_thickness(ops, P, p_obj, plan, pattern)
     with ops.stage("Lower boundary normal n1: parallel, tilted or following d"):
-        n1 = lower_normal(ops, P, n0, p_obj, d, plan)
+        n1 = lower_normal(ops, P, n0, p_obj, d, plan, pattern)
     with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
         inputs = program_inputs(P)
         res = shade(ops, inputs, n0, n1, d, v, plan)

@@ -95,21 +95,33 @@ def linked_thickness(ops, t, otherwise):
     return ops.select(ops.lt(t, 0.0), otherwise, ops.clamp_input(t, 0.0, D_LIMIT))
 
 
-def layer_thickness(ops, P, p_obj, plan: EffectPlan):
+def pattern_thickness(ops, P, p_obj, plan: EffectPlan):
+    """The plan's thickness pattern (nm) at ``p_obj``, or None for a plan without one (a constant
+    thickness, or a link's)."""
+    if plan.thickness in ("constant", "input"):
+        return None
+    return thickness_at(ops, p_obj, *pattern_inputs(P), pattern=plan.thickness)
+
+
+def layer_thickness(ops, P, p_obj, plan: EffectPlan, pattern=None):
     """Thickness ``d`` (nm) at the object-space position ``p_obj``: the Thickness input where it is
-    linked, else the plan's pattern.  A plan made for a link evaluates no pattern (a group made for a
-    link that lost it, without the add-on to rebuild it, renders Thickness Min); a pattern's plan
-    still takes a link made without the add-on (its lower normal keeps the pattern's gradient)."""
+    linked, else the plan's pattern (``pattern``: :func:`pattern_thickness`, computed when not given).
+    A plan made for a link evaluates no pattern (a group made for a link that lost it, without the
+    add-on to rebuild it, renders Thickness Min); a pattern's plan still takes a link made without the
+    add-on (its lower normal keeps the pattern's gradient)."""
     if plan.thickness == "constant":
         return P["d_min"]
     if plan.thickness == "input":
         return linked_thickness(ops, ops.input(THICKNESS_SOCKET), P["d_min"])
-    return linked_thickness(ops, ops.input(THICKNESS_SOCKET),
-                            thickness_at(ops, p_obj, *pattern_inputs(P), pattern=plan.thickness))
+    if pattern is None:
+        pattern = pattern_thickness(ops, P, p_obj, plan)
+    return linked_thickness(ops, ops.input(THICKNESS_SOCKET), pattern)
 
 
-def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan):
-    """Lower boundary normal ``n1`` (world space) at a point of upper normal ``n0``."""
+def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan, pattern=None):
+    """Lower boundary normal ``n1`` (world space) at a point of upper normal ``n0``; ``d`` the
+    thickness, ``pattern`` the plan's pattern there (its gradient is the pattern's own: ``d`` where
+    not given)."""
     if plan.normals == "tilted":
         # The object's axes in world space: the tilt sticks to the object.
         up = ops.normalize(ops.object_to_world((0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
@@ -119,6 +131,7 @@ def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan):
         # The gradient of a linked thickness is the renderer's: Blender's Bump node on it.
         return ops.bump_normal(n0, d, P["bump_strength"])
     if plan.normals == "correlated" and plan.thickness != "constant":
-        grad = thickness_gradient(ops, p_obj, d, *pattern_inputs(P), pattern=plan.thickness)
+        base = d if pattern is None else pattern
+        grad = thickness_gradient(ops, p_obj, base, *pattern_inputs(P), pattern=plan.thickness)
         return correlated_normal(ops, n0, grad, P["bump_strength"])
     return n0
