@@ -18,6 +18,7 @@ import layered_brdf_addon
 from layered_brdf_addon.backends import node_group as node_group_builder
 from layered_brdf_addon.blender.material import input_value, read_inputs, shader_node
 from layered_brdf_addon.blender.scene import deterministic_cycles, ensure_passes, render_passes
+from layered_brdf_addon.blender.stored_keys import SETTINGS
 from layered_brdf_reference.compare import agreement
 
 from constants import MAX_FAILING, REL_TOL
@@ -44,6 +45,7 @@ def _values_by_frame():
 
 @pytest.fixture
 def release_file(tmp_path):
+    registered = hasattr(bpy.types.Material, SETTINGS)
     layered_brdf_addon.unregister()  # so that opening it runs no upgrade
     path = tmp_path / "release.blend"
     shutil.copy(RELEASE, path)
@@ -59,6 +61,8 @@ def release_file(tmp_path):
         yield before_values, before
     finally:
         layered_brdf_addon.unregister()
+        if registered:  # left as found
+            layered_brdf_addon.register()
 
 
 @pytest.mark.slow
