@@ -11,8 +11,9 @@ from __future__ import annotations
 import functools
 
 from ..model import program
-from ..model.params import (BASE_COLOR_DESCRIPTION, THICKNESS_DESCRIPTION, THICKNESS_SOCKET, LayeredParams, group_socket_name, iter_group_sockets,
-                            iter_sockets, socket_default, socket_limits, socket_name)
+from ..model.params import (BASE_COLOR_DESCRIPTION, THICKNESS_DESCRIPTION, THICKNESS_SOCKET, LayeredParams,
+                            group_socket_name, iter_group_sockets, iter_sockets, socket_default, socket_limits,
+                            socket_name)
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
 from .osl_ops import OslOps

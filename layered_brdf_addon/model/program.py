@@ -70,7 +70,8 @@ __all__ = [
     "film_amplitudes", "film_diffuse_rho", "lobe_amplitudes", "LOBE_PLACEMENT", "channel_block", "channel_lobes",
     "diffuse_colour", "merged_group_weights", "shade_spectral", "spectral_groups", "spectral_step", "DEG",
     "D_LIMIT", "GRADIENT_STEP", "correlated_normal", "layer_thickness", "lower_normal", "pattern_inputs",
-    "pattern_thickness", "rotate_about", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient", "tilted_normal",
+    "pattern_thickness", "rotate_about", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient",
+    "tilted_normal",
     "FLOAT_LIMIT", "clamped_inputs", "direction_input", "program_inputs", "CLEAR_K", "base_weight",
     "film_transmittance", "shade", "layered_surface",
 ]
