@@ -6,6 +6,7 @@ a thick spectral layer animated down to a thin one keeps its interference colour
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -13,7 +14,8 @@ import pytest
 
 from layered_brdf_addon.model import preset
 from layered_brdf_addon.model.params import ParameterError
-from layered_brdf_addon.model.policy import (BACKENDS, DECIDING_PARAMETERS, LOBES_BY_BACKEND, check_backend,
+from layered_brdf_addon.model.policy import (BACKENDS, DECIDING_PARAMETERS, LOBES_BY_BACKEND, THICKNESS_LINKED,
+                                             check_backend,
                                              plan_effects)
 
 BASE = preset("fig4_parallel")
@@ -55,7 +57,23 @@ def test_an_animated_deciding_parameter_keeps_its_effect(effect, name):
 def test_animating_other_parameters_changes_nothing(effect):
     params, _ = OFF[effect]
     others = {"e0", "e1", "noise_scale", "noise_phase", "base_r", "tilt_azimuth"}
-    assert plan_effects(params, others) == plan_effects(params)
+    # Only the choice of baked tables changes: an animated value cannot be baked.
+    assert plan_effects(params, others) == replace(plan_effects(params), tables=False)
+
+
+def test_tables_only_for_constant_values_of_the_node_group():
+    """Baked tables where every value is a constant, the boundaries are parallel, the thickness is the
+    pattern's and the backend is the node group; anything animated, Effects 'all', Evaluation
+    'arithmetic', the OSL backend, a tilted boundary or a linked thickness compute instead."""
+    p = preset("oil_slick")
+    assert plan_effects(p).tables and plan_effects(p).key.endswith("Tb")
+    assert not plan_effects(p, {"e0"}).tables
+    assert not plan_effects(p, {THICKNESS_LINKED}).tables
+    assert not plan_effects(p, backend="osl").tables
+    assert not plan_effects(p.replace(effects="all")).tables
+    assert not plan_effects(p.replace(evaluation="arithmetic")).tables
+    assert not plan_effects(p.replace(normal_mode="tilted", tilt=10.0)).tables
+    assert plan_effects(p.replace(d_max=p.d_min)).tables  # a constant thickness: one row
 
 
 def test_animation_only_adds_effects():
@@ -158,6 +176,6 @@ def test_second_harmonic_only_where_the_layer_bounces_light_back():
     from layered_brdf_addon.model.media import layer_index_values, lower_medium_values
 
     film = BASE.replace(optics="physical", **layer_index_values("tio2_amorphous"), **lower_medium_values("titanium"))
-    assert plan_effects(film).multibeam and plan_effects(film).key.endswith("T2o")  # o: titanium absorbs
+    assert plan_effects(film).multibeam and plan_effects(film, backend="osl").key.endswith("T2o")  # o: absorbs
     assert not plan_effects(film.replace(optics="paper")).multibeam
     assert not plan_effects(film.replace(r2_r=2.4, r2_g=2.47, r2_b=2.55, k2_r=0.0, k2_g=0.0, k2_b=0.0)).multibeam

@@ -26,7 +26,9 @@ NODE_GROUPS_DIR = ROOT / "node_groups"
 
 
 def default_plan() -> EffectPlan:
-    return plan_effects(LayeredParams())
+    """The default material's plan with its closures computed (the whole program; a material's
+    tables are its own, baked in its file)."""
+    return plan_effects(LayeredParams(), backend="osl")
 
 
 def node_group_file(plan: EffectPlan) -> Path:

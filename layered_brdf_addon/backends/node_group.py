@@ -19,14 +19,17 @@ from ..model import params as P_
 from ..model import program
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
+from ..model.shading import tables as tables_module
 from .node_ops import Expr, NodeOps
 from .osl_shader import shader_source
 
-NODE_GROUP_VERSION = 6  # 6: Roughness sockets, Tilt as an angle; 5: sockets named for people, in panels
+NODE_GROUP_VERSION = 7  # 7: baked tables; 6: Roughness sockets, Tilt as an angle; 5: sockets named for people, in panels
 GROUP_PREFIX = "Layered BRDF"
 STAMP_KEY = "layered_brdf_version"
 OPEN_PANELS = ("Layer", "Specular", "Diffuse")  # open on a new node; the others start closed
 PLAN_KEY = "layered_brdf_plan"
+TABLE_SLOT_KEY = "layered_brdf_table_slot"  # on a group's Image Texture node: which image of the tables it reads
+TABLE_SHAPE_KEY = "layered_brdf_table_shape"  # on a group built for tables: its layout
 
 
 def stamp_plans() -> list[EffectPlan]:
@@ -68,7 +71,7 @@ def _output_digest() -> str:
     h = hashlib.sha1()
     for plan in stamp_plans():
         h.update(_COMMENT.sub("", shader_source(plan)).encode())
-    for module in (inspect.getmodule(NodeOps), inspect.getmodule(_output_digest)):
+    for module in (inspect.getmodule(NodeOps), inspect.getmodule(_output_digest), tables_module):
         h.update(code_without_docs(inspect.getsource(module)).encode())
     return h.hexdigest()[:12]
 
@@ -101,22 +104,23 @@ def is_current(group, plan: EffectPlan) -> bool:
     return group.get(STAMP_KEY) == build_stamp() and group.get(PLAN_KEY) == plan.key
 
 
-def ensure_group(plan: EffectPlan):
-    """The node group for ``plan``: reused when current, rebuilt in place when stale."""
+def ensure_group(plan: EffectPlan, layout=None):
+    """The node group for ``plan`` (for tables of ``layout`` where the plan has tables): reused when
+    current, rebuilt in place when stale."""
     check_backend("nodes", plan.lobe)
     name = group_name(plan)
     group = bpy.data.node_groups.get(name)
     if group is not None and group.library is None and is_current(group, plan):
         return group
     if group is not None and group.library is None and group.users == 0:
-        build_into(group, plan)  # nothing uses it: rebuilt in place
+        build_into(group, plan, layout)  # nothing uses it: rebuilt in place
         return group
     if group is not None and group.library is None:
         # Other materials still use the stale group: it stays, under another name, until each is
         # rebuilt from its own sockets (their values, links and keyframes are kept), then goes.
         group.name = f"{name} (outdated)"
     group = bpy.data.node_groups.new(name, "ShaderNodeTree")
-    build_into(group, plan)
+    build_into(group, plan, layout)
     return group
 
 
@@ -218,6 +222,14 @@ class GroupOps(NodeOps):
                                                 "Normal": n}, invert=True)
         return self.out(node, dd, "Normal", "vector")
 
+    def table(self, k, xy):
+        """Image ``k`` of the material's baked tables at ``xy`` (an Image Texture, linear, extended at the
+        edges; the image is the material's, assigned by the Blender layer): its colour and alpha."""
+        node, dd = self.node("ShaderNodeTexImage", {"Vector": xy}, interpolation="Linear", extension="EXTEND",
+                             label=f"Baked table {k}")
+        node[TABLE_SLOT_KEY] = k
+        return self.out(node, dd, "Color", "vector"), self.out(node, dd, "Alpha", "float")
+
     def noise_fbm(self, p, w, scale, detail, roughness):
         n, dd = self.node("ShaderNodeTexNoise", {"Vector": p, "W": w, "Scale": scale, "Detail": detail,
                                                  "Roughness": roughness, "Lacunarity": 2.0, "Distortion": 0.0},
@@ -225,8 +237,26 @@ class GroupOps(NodeOps):
         return self.out(n, dd, "Fac", "float")
 
 
-def build_into(group, plan: EffectPlan) -> None:
-    """(Re)build ``group``'s nodes for ``plan``: idempotent, stamps version and plan."""
+def _colour(ops, value):
+    """A colour socket's value: a colour of the program, or its three channels combined."""
+    if not isinstance(value, tuple):
+        return value
+    col, dd = ops.node("ShaderNodeCombineColor", {"Red": value[0], "Green": value[1], "Blue": value[2]})
+    return ops.out(col, dd, 0, "vector")
+
+
+def table_nodes(group) -> dict:
+    """The Image Texture nodes of a group built for tables, by the image of the tables each reads."""
+    return {n[TABLE_SLOT_KEY]: n for n in group.nodes if n.bl_idname == "ShaderNodeTexImage" and TABLE_SLOT_KEY in n}
+
+
+def layout_record(layout) -> str:
+    return f"{layout.closures}:{layout.width}x{layout.height}"
+
+
+def build_into(group, plan: EffectPlan, layout=None) -> None:
+    """(Re)build ``group``'s nodes for ``plan`` (with a plan for tables, for the tables of ``layout``,
+    :class:`~..model.shading.tables.TableLayout`): idempotent, stamps version and plan."""
     group.nodes.clear()
     _interface(group)
     group.description = group_description(plan)
@@ -239,23 +269,21 @@ def build_into(group, plan: EffectPlan) -> None:
     # convention for hidden data); the material's own group stays visible.
     ops = GroupOps(group, gin, x0=200.0, stamp=build_stamp(),
                    subgroup_name=lambda key: f".{GROUP_PREFIX} part: {key}")
-    res = program.layered_surface(ops, plan)
+    res = program.layered_surface(ops, plan, layout)
     extras = res.extras
     n0 = extras["upper_normal"]
 
     with ops.stage("Closures: diffuse, glossy lobes and your Base Shader, added"):
         shaders = []
         if res.diffuse is not None:
-            col, dd = ops.node("ShaderNodeCombineColor", {"Red": res.diffuse[0], "Green": res.diffuse[1],
-                                                          "Blue": res.diffuse[2]})
-            bsdf, dd = ops.node("ShaderNodeBsdfDiffuse", {"Color": ops.out(col, dd, 0, "vector"), "Roughness": 0.0,
+            bsdf, dd = ops.node("ShaderNodeBsdfDiffuse", {"Color": _colour(ops, res.diffuse), "Roughness": 0.0,
                                                           "Normal": n0})
             shaders.append(ops.out(bsdf, dd, 0, "shader"))
         for cl in res.glossy:
-            col, dd = ops.node("ShaderNodeCombineColor", {"Red": cl.weight[0], "Green": cl.weight[1],
-                                                          "Blue": cl.weight[2]})
-            rough = ops.sqrt(ops.clamp(cl.alpha, 0.0, 1.0))  # the Glossy node's Roughness is sqrt(alpha)
-            inputs = {"Color": ops.out(col, dd, 0, "vector"), "Roughness": rough, "Normal": cl.normal}
+            colour = _colour(ops, cl.weight)
+            # The Glossy node's Roughness is sqrt(alpha).
+            rough = cl.roughness if cl.roughness is not None else ops.sqrt(ops.clamp(cl.alpha, 0.0, 1.0))
+            inputs = {"Color": colour, "Roughness": rough, "Normal": cl.normal}
             if cl.tangent is not None:
                 inputs.update({"Anisotropy": cl.anisotropy, "Tangent": cl.tangent})
             bsdf, dd = ops.node("ShaderNodeBsdfGlossy", inputs, distribution="BECKMANN")
@@ -279,4 +307,8 @@ def build_into(group, plan: EffectPlan) -> None:
         group.links.new(value.socket, gout.inputs[name])
     group[STAMP_KEY] = build_stamp()
     group[PLAN_KEY] = plan.key
+    if layout is not None:
+        group[TABLE_SHAPE_KEY] = layout_record(layout)
+    elif TABLE_SHAPE_KEY in group:
+        del group[TABLE_SHAPE_KEY]
     group["layered_brdf_node_count"] = ops.count

@@ -8,6 +8,8 @@ shader, with only the code its effects need.  bpy-free.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import functools
 
 from ..model import program
@@ -236,8 +238,10 @@ def _parameter_lines() -> list[str]:
 
 @functools.lru_cache(maxsize=64)
 def shader_source(plan: EffectPlan) -> str:
-    """The OSL source of the shader for ``plan``."""
+    """The OSL source of the shader for ``plan`` (which computes its closures: a plan's tables are the
+    node group's)."""
     check_backend("osl", plan.lobe)
+    plan = replace(plan, tables=False)
     ops = ShaderOps()
     body = FunctionBody(SHADER_NAME, code=program.layered_surface.__code__)
     ops._bodies.append(body)

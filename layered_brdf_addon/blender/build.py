@@ -14,6 +14,7 @@ from ..model.base_layers import base_node
 from ..model.params import THICKNESS_SOCKET, LayeredParams, ParameterError, group_socket_name, iter_sockets
 from ..model.plan import EffectPlan
 from ..model.policy import plan_effects
+from ..model.table_bake import table_layout
 from . import osl as osl_backend
 from .animation import animated_parameters, restore_animation, stash_animation
 from .migration import claim, legacy_base_links, link_legacy_base, repair
@@ -22,6 +23,7 @@ from .slots import material_for
 from .sockets import find_socket, held_units, legacy_tint, node_damage, set_inputs, socket_parameter
 from .stored_keys import (AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL, BACKEND_KEY, BASE_CHANNELS, BUILD_KEY,
                           ENUMS_KEY, OWN_PREFIX, ROLE_KEY, SHADER_NODE, TEXT_KEY, settings_record)
+from .tables import ensure_tables, tables_current
 from .targets import params_argument, shown
 from .unit_conversion import link_converted
 from .unused_data import remove_unused_own_data
@@ -47,13 +49,16 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
         raise ParameterError("name", name if isinstance(name, str) else shown(name), "a material name (text)")
     policy.check_backend(backend, params.lobe)
     mat = material_for(target, name)
-    plan = plan or plan_effects(params, animated_parameters(mat))
+    plan = plan or plan_effects(params, animated_parameters(mat), backend)
     if plan.lobe != params.lobe:
         plan = EffectPlan(**{**plan.to_dict(), "lobe": params.lobe})
     node, own = claim(mat)
     if not tree_current(mat, node, backend, plan, params):
-        node = _build_tree(mat, params, backend, plan, node, own)
-        mat[BUILD_KEY] = build_key(backend, plan, params)
+        if not tree_current(mat, node, backend, plan, params, tables=False):
+            node = _build_tree(mat, params, backend, plan, node, own)
+            mat[BUILD_KEY] = build_key(backend, plan, params)
+        if backend == "nodes" and plan.tables:
+            ensure_tables(node, params, plan)
         remove_unused_own_data()
     repair(mat, node)
     set_inputs(node, params)
@@ -68,16 +73,20 @@ def build_key(backend: str, plan: EffectPlan, params: LayeredParams) -> str:
     return f"{backend}:{plan.key}:{params.base_layer}"
 
 
-def tree_current(mat, node, backend: str, plan: EffectPlan, params: LayeredParams, check_sources: bool = True) -> bool:
+def tree_current(mat, node, backend: str, plan: EffectPlan, params: LayeredParams, check_sources: bool = True,
+                 tables: bool = True) -> bool:
     """Whether ``mat``'s tree, with ``node`` its shader node (or None), is what a build for
     ``backend``, ``plan`` and ``params`` makes: its build record says so, the node has every
-    socket, and it runs this version's node group for ``plan`` or the OSL script (its source
-    compared with the plan's only with ``check_sources``)."""
+    socket, and it runs this version's node group for ``plan`` (for a plan with tables, baked for
+    ``params``; with ``check_sources``, their texels read back too; without ``tables``, whatever
+    its tables hold) or the OSL script (its source compared with the plan's only with
+    ``check_sources``)."""
     if node is None or mat.get(BUILD_KEY) != build_key(backend, plan, params) or node_damage(node) is not None:
         return False
     if backend == "nodes":
         return node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and \
-            node_group_builder.is_current(node.node_tree, plan)
+            node_group_builder.is_current(node.node_tree, plan) and \
+            (not (tables and plan.tables) or tables_current(node.node_tree, params, plan, check_sources))
     return node.bl_idname == "ShaderNodeScript" and node.script is not None and \
         (not check_sources or node.script.as_string() == osl_backend.source(plan))
 
@@ -106,14 +115,15 @@ def _group_lacks_sockets(group) -> bool:
         any(group_socket_name(s) not in inputs for s in iter_sockets())
 
 
-def _group_for(plan: EffectPlan):
+def _group_for(plan: EffectPlan, params: LayeredParams):
     """The node group for ``plan`` (:func:`node_group_builder.ensure_group`). A group stamped as
     current that lacks a socket (the artist deleted one) is marked stale first, so it is rebuilt,
     or set aside while other materials still use it (each is repaired when applied again)."""
-    group = node_group_builder.ensure_group(plan)
+    layout = table_layout(params, plan) if plan.tables else None
+    group = node_group_builder.ensure_group(plan, layout)
     if _group_lacks_sockets(group):
         del group[node_group_builder.PLAN_KEY]
-        group = node_group_builder.ensure_group(plan)
+        group = node_group_builder.ensure_group(plan, layout)
     return group
 
 
@@ -149,7 +159,7 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
         out = tree.nodes.new("ShaderNodeOutputMaterial")
         out.location = (400, 0)
     if backend == "nodes":
-        group = _group_for(plan)
+        group = _group_for(plan, params)
         node = tree.nodes.new("ShaderNodeGroup")
         node.node_tree = group
     else:

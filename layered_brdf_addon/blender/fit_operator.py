@@ -110,7 +110,7 @@ def apply_fitted(target, params: LayeredParams):
         backend = settings(target).backend
         params = params.validate()
         check_backend(backend, params.lobe)
-        plan = plan_effects(params, animated_parameters(target))
+        plan = plan_effects(params, animated_parameters(target), backend)
         mat = sync.apply(target, params, backend, plan, preview=True)
     settings(mat).preset = ""  # fitted values are no preset's
     return mat

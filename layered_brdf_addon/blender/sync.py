@@ -59,7 +59,7 @@ def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
     params = params_of(mat)
     backend = settings(mat).backend
     policy.check_backend(backend, params.lobe)
-    return params, backend, plan_effects(params, animated_parameters(mat))
+    return params, backend, plan_effects(params, animated_parameters(mat), backend)
 
 
 def desired_or_problem(mat) -> tuple[tuple[LayeredParams, str, EffectPlan] | None, str | None]:
@@ -172,7 +172,7 @@ def apply_to_object(obj, params: LayeredParams | None = None, backend: str | Non
         backend = settings(mat).backend if mat is not None else "nodes"
     policy.check_backend(backend, params.lobe)
     animated = animated_parameters(mat) if mat is not None else set()
-    return apply(obj, params, backend, plan_effects(params, animated), preview)
+    return apply(obj, params, backend, plan_effects(params, animated, backend), preview)
 
 
 def remove_from_object(obj) -> bool:

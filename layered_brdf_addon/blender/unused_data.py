@@ -1,4 +1,4 @@
-"""The add-on's own data blocks that nothing uses any more: node groups and OSL texts it made
+"""The add-on's own data blocks that nothing uses any more: node groups, baked tables and OSL texts it made
 (recognised by their stamps), removed after a rebuild; unstamped, linked or used ones are kept.
 """
 from __future__ import annotations
@@ -7,6 +7,7 @@ import bpy
 
 from ..backends import node_group as node_group_builder
 from .stored_keys import SUBGROUP_KEY, TEXT_KEY
+from .tables import unused_tables
 
 
 def _script_texts_in_use() -> set:
@@ -42,6 +43,9 @@ def remove_unused_own_data() -> list[str]:
         for g in stale:
             removed.append(g.name)
             bpy.data.node_groups.remove(g)
+    for image in unused_tables():
+        removed.append(image.name)
+        bpy.data.images.remove(image)
     used = _script_texts_in_use()
     for t in [t for t in bpy.data.texts if t.library is None and t.get(TEXT_KEY) is not None
               and t.name not in used]:

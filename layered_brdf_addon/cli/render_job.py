@@ -251,7 +251,7 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
         paths = req.paths
         # The plan the material was built with: a --blend material's keyframes, drivers and linked
         # sockets keep the effects they may switch on.
-        plan = plan_effects(req.params, animated_parameters(material))
+        plan = plan_effects(req.params, animated_parameters(material), req.backend)
 
         def describe(render_seconds: float) -> dict[str, Any]:
             return sidecar(

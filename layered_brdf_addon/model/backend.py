@@ -82,3 +82,10 @@ def members(protocol: type) -> list[str]:
             continue
         out |= {name for name, value in vars(cls).items() if callable(value) and not name.startswith("_")}
     return sorted(out)
+
+
+class TableOps(SurfaceOps, Protocol):
+    """A shading point that reads a material's baked tables (:mod:`.shading.tables`): the node group
+    and numpy; the OSL shader always computes its closures."""
+
+    def table(self, k: int, xy: Value) -> tuple[Value, Value]: ...  # image k's colour and alpha at xy

@@ -212,8 +212,9 @@ class ShadingPoint:
     SOCKETS = "osl"  # the inputs are socket values as the OSL shader's (params.socket_units)
 
     def __init__(self, inputs, normal, incoming, p_object, matrix=None, normal_input=(0.0, 0.0, 0.0),
-                 height_gradient=None):
+                 height_gradient=None, tables=None):
         self.inputs = dict(inputs)
+        self.tables = tables
         self.height_gradient = height_gradient
         self.normal = vec(normal)
         self.view = vec(np.broadcast_to(np.asarray(incoming, dtype=float), np.shape(normal)))
@@ -262,6 +263,13 @@ class ShadingPoint:
         raise NoiseUnavailable("numpy does not evaluate Blender's noise: pass the render's thickness "
                                "(and lower normal) passes")
 
+    def table(self, k, xy):
+        """Image ``k`` of the material's baked tables (``tables``: images, H, W, RGBA) at image coordinates
+        ``xy``: its colour and alpha (:func:`table_lookup`)."""
+        x, y, _ = components(xy)
+        texel = table_lookup(self.tables, k, x, y)
+        return vec(texel[..., :3]), texel[..., 3]
+
     def bump_normal(self, n, height, distance):
         """``normalize(n + distance grad_t(height))``, the tangential part of the height's gradient:
         what Blender's Bump node (inverted) gives; the gradient is ``height_gradient`` (world space),
@@ -271,6 +279,27 @@ class ShadingPoint:
         g = vec(np.broadcast_to(np.asarray(self.height_gradient, dtype=float), np.shape(n)))
         g = g - n * dot(g, n)
         return normalize(n + g * distance, n)
+
+
+def table_lookup(tables: np.ndarray, k: int, x, y):
+    """Image ``k`` of ``tables`` at image coordinates ``x``, ``y`` (0..1), as Cycles' Image Texture reads
+    it with linear interpolation and extended edges: texel centres at ``(i + 0.5) / W``."""
+    _, h, w, _ = tables.shape
+    img = tables[k].astype(float)
+
+    def axis(u, n):
+        p = np.asarray(u, dtype=float) * n - 0.5
+        i0 = np.floor(p)
+        f = p - i0
+        i0 = i0.astype(int)
+        return np.clip(i0, 0, n - 1), np.clip(i0 + 1, 0, n - 1), f
+
+    x0, x1, fx = axis(x, w)
+    y0, y1, fy = axis(y, h)
+    fx, fy = fx[..., None], fy[..., None]
+    top = img[y0, x0] * (1.0 - fx) + img[y0, x1] * fx
+    bottom = img[y1, x0] * (1.0 - fx) + img[y1, x1] * fx
+    return top * (1.0 - fy) + bottom * fy
 
 
 def named(hint, x):

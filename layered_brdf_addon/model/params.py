@@ -113,6 +113,7 @@ PHYSICAL_OPTICS = "physical optics"
 LOWER_MEDIUM_KEYS = ("r2_r", "r2_g", "r2_b", "k2_r", "k2_g", "k2_b")
 LAYER_INDEX_MODES = ("channels", "ior")
 EFFECTS_MODES = ("planned", "all")
+EVALUATION_MODES = ("tables", "arithmetic")
 IOR_AND_DISPERSION = "ior and dispersion"  # what added the IOR and Dispersion sockets
 PER_CHANNEL = "Per-channel IOR"  # the group (node panel, sub-panel) of the paper's three indices
 ACCURACY_MODES = ("rgb", "analytic", "spectral4", "spectral8", "spectral16", "spectral32")
@@ -139,6 +140,7 @@ OPTION_LABELS = {
     "paper": "Paper (lower boundary a mirror)", "physical": "Physical (thin-film optics)",
     "channels": "Per channel (the paper's three indices)", "ior": "IOR and Dispersion",
     "planned": "Planned (fastest)", "all": "All (edit without the add-on)",
+    "tables": "Baked tables (fastest)", "arithmetic": "Arithmetic (animatable)",
     "rgb": "RGB (the paper's 3 wavelengths)", "analytic": "Analytic spectral",
     "spectral4": "Spectral, 4 wavelengths", "spectral8": "Spectral, 8 wavelengths",
     "spectral16": "Spectral, 16 wavelengths", "spectral32": "Spectral, 32 wavelengths",
@@ -291,6 +293,13 @@ class LayeredParams:
                       "shader; the add-on rebuilds it when an edit calls for another) or 'all' (every effect the "
                       "modes allow stays on the node, so that any socket can be edited without the add-on, at a "
                       "cost per sample)", options=EFFECTS_MODES, group="Accuracy")
+    evaluation: str = _p("tables", "Evaluation",
+                         "How the node group finds its closures: 'tables' (read from small images baked for the "
+                         "material's values, over the view's angle and the thickness: the cost of Blender's own "
+                         "BSDFs; used where every value is a constant, the boundaries are parallel and the "
+                         "thickness is the pattern's, and rebaked by the add-on when a value changes) or "
+                         "'arithmetic' (computed at every shading point: any socket may be keyframed, driven or "
+                         "linked). The OSL shader always computes", options=EVALUATION_MODES, group="Accuracy")
     lobe: str = _p("beckmann", "Lobe",
                    "Closure used for the specular lobes: 'beckmann' (both backends) or 'phong' (OSL only)",
                    options=LOBES, group="Accuracy")

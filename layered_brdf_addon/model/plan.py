@@ -24,6 +24,7 @@ class EffectPlan:
     multibeam: bool = False  # physical: the harmonics of the beams that bounce inside the layer (program.harmonic_count)
     passes: bool = True  # physical: the lower medium may pass light to the Base Shader (False: it absorbs, a metal)
     index: str = "channels"  # the layer's index: "channels" (three sockets) or "ior" (IOR and Dispersion)
+    tables: bool = False  # the closures read from the material's baked tables (.shading.tables), not computed
 
     @classmethod
     def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
@@ -47,6 +48,8 @@ class EffectPlan:
             parts.append(("T2" if self.multibeam else "T") + ("" if self.passes else "o"))
         if self.index == "ior":
             parts.append("Ab")
+        if self.tables:
+            parts.append("Tb")
         return "".join(parts)
 
     @property
@@ -65,6 +68,8 @@ class EffectPlan:
             parts.append("specular only")
         if self.lobe == "phong":
             parts.append("Phong lobes")
+        if self.tables:
+            parts.append("baked tables")
         return ", ".join(parts)
 
     def to_dict(self) -> dict:
@@ -95,4 +100,7 @@ class EffectPlan:
         if self.specular:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")
+        if self.tables:
+            out.append("the closures' weights, widths and anisotropy read from tables baked for the material's "
+                       "values (over the view's angle and the thickness), not computed per point")
         return out

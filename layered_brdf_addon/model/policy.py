@@ -10,11 +10,13 @@ shader.  The planner never drops an effect that another frame needs.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Iterable
 
 from .params import LayeredParams, ParameterError, iter_sockets
 from .plan import EffectPlan
 from .shading.base_shader import CLEAR_K
+from .shading.tables import tabulable
 
 #: The shader backends: a node group of stock nodes, or an OSL shader (Cycles CPU / OptiX).
 BACKENDS = ("nodes", "osl")
@@ -70,13 +72,17 @@ def supports(backend: str, lobe: str) -> bool:
     return lobe in LOBES_BY_BACKEND.get(backend, ())
 
 
-def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
-    """The effects the shader must contain for ``p`` on every frame.
+def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = "nodes") -> EffectPlan:
+    """The effects the shader must contain for ``p`` on every frame, and whether the node group
+    (``backend`` "nodes") reads its closures from baked tables: where ``p.evaluation`` is "tables",
+    nothing is animated, the effects are planned and the plan's closures can be tabulated
+    (:func:`~.shading.tables.tabulable`).
 
     ``animated``: names of parameters that may change between frames (keyframes, drivers,
     linked sockets), and :data:`THICKNESS_LINKED` where the Thickness input is linked.  See docs/effect-planning.md.
     """
     animated = frozenset(animated)
+    tables = backend == "nodes" and p.evaluation == "tables" and p.effects == "planned" and not animated
     if p.effects == "all":  # every effect stays, as if every socket could take any value
         animated |= {spec.name for spec in iter_sockets()}
 
@@ -102,10 +108,11 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = ()) -> EffectPlan:
     physical = p.optics == "physical"
     multibeam = physical and interference and (moving("multibeam") or beam_contrast(p) > MULTIBEAM_CONTRAST)
     passes = not physical or moving("passes") or min(p.k2) < CLEAR_K
-    return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
+    plan = EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
                       thickness=thickness, normals=normals, dispersion=dispersion, lobe=p.lobe,
                       spectral=spectral, interference=interference, analytic=analytic, optics=p.optics,
                       multibeam=multibeam, passes=passes, index=p.layer_index)
+    return replace(plan, tables=True) if tables and tabulable(plan) else plan
 
 
 def beam_contrast(p: LayeredParams) -> float:

@@ -32,14 +32,15 @@ in :mod:`.shading`, one part per module, and every name of theirs is importable 
 * :mod:`.shading.spectral_mode`: the spectral modes, one wavelength after the other;
 * :mod:`.shading.surface_prelude`: thickness and lower normal at the shading point;
 * :mod:`.shading.inputs`: the shader's inputs, clamped;
-* :mod:`.shading.base_shader`: what reaches the Base Shader.
+* :mod:`.shading.base_shader`: what reaches the Base Shader;
+* :mod:`.shading.tables`: the closures read from a material's baked tables.
 """
 from __future__ import annotations
 
 from .params import WAVELENGTHS_NM
 from .plan import EffectPlan
 from .shading.amplitudes import diffuse_rho, film_amplitudes, film_diffuse_rho, lobe_amplitudes
-from .shading.base_shader import CLEAR_K, base_weight, film_transmittance
+from .shading.base_shader import CLEAR_K, base_weight, film_transmittance, passed_to_base
 from .shading.channel_program import LOBE_PLACEMENT, channel_block, channel_lobes, diffuse_colour
 from .shading.closures import Closure, ShadingResult
 from .shading.fold import FOLD_BASIS, FOLD_RIDGE, fold_basis, fold_interference, fold_weights, lobe_correlation
@@ -51,6 +52,7 @@ from .shading.lobes import (ANISO_FLOOR, INV_2PI, MIN_COS, angle2, beckmann_lamb
 from .shading.placement import exit_direction, interference_centre, layer_path, lobe_geometry
 from .shading.spectral_mode import merged_group_weights, shade_spectral, spectral_groups, spectral_step
 from .shading.step import shader_function
+from .shading.tables import TableLayout, tabulated_shade
 from .shading.surface_prelude import (DEG, D_LIMIT, GRADIENT_STEP, correlated_normal, layer_thickness, lower_normal,
                                       pattern_inputs, pattern_thickness, rotate_about, tangent_axis, thickness_at,
                                       thickness_factor,
@@ -73,7 +75,7 @@ __all__ = [
     "pattern_thickness", "rotate_about", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient",
     "tilted_normal",
     "FLOAT_LIMIT", "clamped_inputs", "direction_input", "program_inputs", "CLEAR_K", "base_weight",
-    "film_transmittance", "shade", "layered_surface",
+    "film_transmittance", "passed_to_base", "TableLayout", "tabulated_shade", "shade", "layered_surface",
 ]
 
 
@@ -120,8 +122,9 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     return res
 
 
-def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
-    """The whole shader at one shading point, from the material's inputs.
+def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None) -> ShadingResult:
+    """The whole shader at one shading point, from the material's inputs; a plan with ``tables``
+    reads the closures from the material's baked tables, of ``layout`` (:mod:`.shading.tables`).
 
     ``extras`` carries the shader's other outputs: ``thickness`` (nm), ``lower_normal``,
     ``upper_normal`` (world space) and ``base_weight`` (the factor of the Base Shader input).
@@ -138,20 +141,13 @@ def layered_surface(ops, plan: EffectPlan) -> ShadingResult:
         d = layer_thickness(ops, P, p_obj, plan, pattern)
     with ops.stage("Lower boundary normal n1: parallel, tilted or following d"):
         n1 = lower_normal(ops, P, n0, p_obj, d, plan, pattern)
-    with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
-        inputs = program_inputs(P)
-        res = shade(ops, inputs, n0, n1, d, v, plan)
-    if plan.optics == "physical" and not plan.passes:
-        transmitted = 0.0  # an absorbing lower medium (a metal) keeps what enters it
-    elif plan.optics == "physical":
-        with ops.stage("What reaches the Base Shader: what the film neither reflects nor absorbs"):
-            cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-            transmitted = film_transmittance(ops, ops.combine(*inputs["r1"]), inputs["r0"],
-                                             ops.combine(*inputs["r2"]), ops.combine(*inputs["k2"]), inputs["kd"],
-                                             cos_v, orders=harmonic_count(plan))
+    if plan.tables:
+        with ops.stage("Lobes and interference from the material's baked tables: the view's angle and d"):
+            res = tabulated_shade(ops, plan, layout, P, n0, v, d)
     else:
-        with ops.stage("What reaches the Base Shader: 1 - F(v)"):
-            cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-            transmitted = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
-    res.extras.update(thickness=d, lower_normal=n1, upper_normal=n0, base_weight=transmitted)
+        with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
+            inputs = program_inputs(P)
+            res = shade(ops, inputs, n0, n1, d, v, plan)
+        res.extras.update(base_weight=passed_to_base(ops, plan, inputs, v, n0))
+    res.extras.update(thickness=d, lower_normal=n1, upper_normal=n0)
     return res

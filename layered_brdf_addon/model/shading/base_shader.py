@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from .fresnel import fresnel_f0, schlick
 from .step import shader_function
-from .thin_film import film_beams
+from .thin_film import film_beams, harmonic_count
 
 
 def base_weight(ops, r1, r0, cos_v):
@@ -37,3 +37,21 @@ def film_transmittance(ops, r1, r0, n2, k2, kd, cos_v, *, orders=1):
     passed = ops.clamp(1.0 - crest, 0.0, 1.0) * ops.lt(k2, CLEAR_K)
     r, g, b = ops.components(passed)
     return ops.minimum(ops.minimum(r, g), b) * (1.0 - kd)
+
+
+def passed_to_base(ops, plan, inputs, v, n0):
+    """The Base Shader's factor for ``plan``: ``1 - F(v)`` with the paper's optics, the film's
+    :func:`film_transmittance` with thin-film optics, 0 where the lower medium absorbs (a metal
+    keeps what enters it).  ``inputs``: the program's inputs (:func:`.inputs.program_inputs`)."""
+    if plan.optics == "physical" and not plan.passes:
+        return 0.0
+    with ops.stage("What reaches the Base Shader: " + ("what the film neither reflects nor absorbs"
+                                                        if plan.optics == "physical" else "1 - F(v)")):
+        cos_v = ops.named("cos_v", ops.clamp(ops.dot(v, n0), 0.0, 1.0))
+        if plan.optics == "physical":
+            passed = film_transmittance(ops, ops.combine(*inputs["r1"]), inputs["r0"], ops.combine(*inputs["r2"]),
+                                        ops.combine(*inputs["k2"]), inputs["kd"], cos_v,
+                                        orders=harmonic_count(plan))
+        else:
+            passed = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
+        return ops.named("transmitted", passed)

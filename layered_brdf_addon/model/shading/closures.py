@@ -16,13 +16,14 @@ class Closure:
     normal: Any
     exponent: Any
     alpha: Any  # geometric mean of the two alphas (the Glossy BSDF's Roughness^2)
-    weight: tuple  # (r, g, b) scalars
+    weight: Any  # (r, g, b) scalars, or a colour of the backend
     anisotropy: Any = 0.0  # the Glossy BSDF's Anisotropy: the lobe's stretch along ``tangent``
     tangent: Any = None
+    roughness: Any = None  # the Glossy BSDF's Roughness, sqrt(alpha), where the program has it as such
 
 
 @dataclass
 class ShadingResult:
     glossy: list = field(default_factory=list)
-    diffuse: tuple | None = None  # (r, g, b) colour of the diffuse closure (normal n0)
+    diffuse: Any = None  # colour of the diffuse closure (normal n0): (r, g, b) scalars or a colour of the backend
     extras: dict = field(default_factory=dict)

@@ -1,0 +1,127 @@
+"""Baking a material's tables (:mod:`.shading.tables`): the shading program run on numpy over a grid of
+view cosines and thicknesses, its closures written texel by texel.
+
+``bake(params, plan)`` returns the layout and the images as one float32 array (images, H, W, RGBA);
+``table_digest`` names what a bake depends on, so that a table is rebaked exactly when it would change.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import replace
+from functools import lru_cache
+
+import numpy as np
+
+from . import ops_numpy
+from .ops_numpy import ShadingPoint
+from .params import WAVELENGTHS_NM, LayeredParams, iter_sockets, socket_values
+from .plan import EffectPlan
+from .shading.base_shader import passed_to_base
+from .shading.inputs import clamped_inputs, program_inputs
+from .shading.tables import COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, NotTabulable, TableLayout, tabulable
+from .shading.thin_film import harmonic_count
+
+SAMPLES_PER_FRINGE = 16  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
+MIN_THICKNESS_SAMPLES = 8
+MAX_THICKNESS_SAMPLES = 160  # six images of 64 x 160 RGBA float32: under 1 MB
+SHORTEST_NM = 400.0  # the bluest wavelength a plan evaluates (spectral modes reach below the RGB channels' 465 nm)
+
+
+def thickness_samples(params: LayeredParams, plan: EffectPlan) -> int:
+    """Texels along the thickness: 1 for a constant one, else enough for :data:`SAMPLES_PER_FRINGE` per fringe
+    (a fringe is ``lambda / (2 r1)`` of thickness at normal incidence, the shortest; the beams that bounce
+    inside the layer add harmonics), within [:data:`MIN_THICKNESS_SAMPLES`, :data:`MAX_THICKNESS_SAMPLES`]."""
+    if plan.thickness == "constant":
+        return 1
+    if not plan.interference:
+        return MIN_THICKNESS_SAMPLES
+    fringes = 2.0 * max(params.r1) * abs(params.d_max - params.d_min) / SHORTEST_NM * harmonic_count(plan)
+    return int(min(max(math.ceil(SAMPLES_PER_FRINGE * fringes) + 1, MIN_THICKNESS_SAMPLES), MAX_THICKNESS_SAMPLES))
+
+
+def _grid(width: int, height: int, d_min, d_max):
+    """View directions and thicknesses of the texels, (H, W): n0 = +z, the view in the xz plane."""
+    c = np.linspace(0.0, 1.0, width) ** 2
+    t = np.linspace(0.0, 1.0, height) if height > 1 else np.zeros(1)
+    C, T = np.meshgrid(c, t)
+    v = np.stack([np.sqrt(np.maximum(1.0 - C * C, 0.0)), np.zeros_like(C), C], axis=-1)
+    return v, d_min + (d_max - d_min) * T
+
+
+def _arithmetic(plan: EffectPlan) -> EffectPlan:
+    return replace(plan, tables=False)
+
+
+def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int):
+    """The program's closures at the texels (:func:`_grid`), and the Base Shader's factor."""
+    from .program import shade  # the program's top imports the shading steps, this module among their users
+
+    plan = _arithmetic(plan)
+    values = socket_values({spec.name: getattr(params, spec.name) for spec in iter_sockets()}, ShadingPoint.SOCKETS)
+    n0 = np.zeros((height, width, 3))
+    n0[..., 2] = 1.0
+    pt = ShadingPoint(values, n0, n0, np.zeros_like(n0))
+    P = clamped_inputs(pt, plan)
+    v, d = _grid(width, height, float(P["d_min"]), float(P["d_max"]))
+    inputs = program_inputs(P)
+    n0v, vv = ops_numpy.vec(n0), ops_numpy.vec(v)
+    res = shade(pt, inputs, n0v, n0v, d, vv, plan, WAVELENGTHS_NM)
+    return res, passed_to_base(pt, plan, inputs, vv, n0v), n0
+
+
+def _is_zero(x) -> bool:
+    return isinstance(x, float) and x == 0.0
+
+
+@lru_cache(maxsize=64)
+def _closures(plan: EffectPlan) -> tuple:
+    """The plan's glossy closures: names and the channels each weighs (the program's structure,
+    the same for every value of the parameters)."""
+    res, _, _ = _shade_grid(LayeredParams(), plan, 2, 1)
+    return tuple((cl.name, tuple(c for c in range(3) if not _is_zero(cl.weight[c]))) for cl in res.glossy)
+
+
+def table_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
+    """The layout of ``params``'s tables for ``plan`` (NotTabulable where the plan's closures depend on more)."""
+    if not tabulable(plan):
+        raise NotTabulable(f"plan {plan.key}: the closures depend on more than the view and the thickness")
+    return TableLayout(_closures(replace(plan, tables=False)), COS_SAMPLES, thickness_samples(params, plan))
+
+
+def _plane(x, shape) -> np.ndarray:
+    return np.broadcast_to(np.asarray(x, dtype=float), shape)
+
+
+def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarray]:
+    """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, H, W, 4)."""
+    layout = table_layout(params, plan)
+    res, base, n0 = _shade_grid(params, plan, layout.width, layout.height)
+    shape = (layout.height, layout.width)
+    out = np.zeros((layout.images, *shape, 4), dtype=np.float32)
+    for k, cl in enumerate(res.glossy):
+        normal = ops_numpy.components(cl.normal)
+        if max(float(np.max(np.abs(_plane(a, shape) - b))) for a, b in zip(normal, (0.0, 0.0, 1.0))) > \
+                PARALLEL_TOLERANCE:
+            raise NotTabulable(f"closure {cl.name} does not lie about the upper normal")
+        for c in range(3):
+            out[k, ..., c] = _plane(cl.weight[c], shape)
+        out[k, ..., 3] = np.sqrt(np.clip(_plane(cl.alpha, shape), 0.0, 1.0))
+        image, channel = layout.anisotropy_slot(k)
+        out[image, ..., channel] = _plane(cl.anisotropy, shape)
+    if res.diffuse is not None:
+        for c in range(3):
+            out[layout.diffuse_image, ..., c] = _plane(res.diffuse[c], shape)
+    out[layout.diffuse_image, ..., 3] = _plane(base, shape)
+    return layout, out
+
+
+def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
+    """What the tables of ``params`` for ``plan`` depend on, as a short digest: the table format, the
+    plan, and every value the shader reads."""
+    values = {spec.name: getattr(params, spec.name) for spec in iter_sockets()}
+    record = json.dumps({"format": TABLE_FORMAT, "plan": plan.key, "samples": [COS_SAMPLES, SAMPLES_PER_FRINGE],
+                         "values": values}, sort_keys=True)
+    return hashlib.sha1(record.encode()).hexdigest()[:16]
+
