@@ -58,7 +58,7 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
             node = _build_tree(mat, params, backend, plan, node, own)
             mat[BUILD_KEY] = build_key(backend, plan, params)
         if backend == "nodes" and plan.tables:
-            ensure_tables(node, params, plan)
+            ensure_tables(node, params, plan, check_pixels=True)
         remove_unused_own_data()
     repair(mat, node)
     set_inputs(node, params)

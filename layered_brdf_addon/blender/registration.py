@@ -1,4 +1,4 @@
-"""Registering the add-on: one list of classes, one property on materials, three handlers.
+"""Registering the add-on: one list of classes, one property on materials, five handlers.
 
 Called only from the package's ``register()`` and ``unregister()`` (the add-on's entry point).
 """
@@ -34,6 +34,8 @@ def _handlers():
     return (
         (bpy.app.handlers.depsgraph_update_post, sync.on_depsgraph_update),
         (bpy.app.handlers.load_post, sync.on_load_post),
+        (bpy.app.handlers.undo_post, sync.on_undo_redo),  # an undo restores values, not an image's texels
+        (bpy.app.handlers.redo_post, sync.on_undo_redo),
         (bpy.app.handlers.version_update, assets.on_version_update),  # older versions' asset marks off
     )
 

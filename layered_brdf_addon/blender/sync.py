@@ -205,7 +205,8 @@ def sync_on_its_own(mat, check_sources: bool = False) -> bool:
 
 
 def upgrade_all() -> list[str]:
-    """Rebuild the local layered materials whose node group or OSL text is out of date, each on
+    """Rebuild the local layered materials whose node group, baked tables (read back) or OSL text is out
+    of date, each on
     its own (one that can't be leaves the others to be done); the names of those rebuilt."""
     return [mat.name for mat in _editable_layered_materials() if sync_on_its_own(mat, check_sources=True)]
 
@@ -223,4 +224,11 @@ def on_depsgraph_update(scene, depsgraph):
 
 @persistent
 def on_load_post(*_args):
+    upgrade_all()
+
+
+@persistent
+def on_undo_redo(*_args):
+    """After an undo or redo: the materials' values are the restored ones, but a baked table's texels
+    are whatever was baked last; every table is read back and rebaked where it differs."""
     upgrade_all()

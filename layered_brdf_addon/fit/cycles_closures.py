@@ -205,6 +205,14 @@ def shade_closures(params: LayeredParams | Mapping, n0, n1, d, v, plan: EffectPl
                          ops_numpy.vec(v), plan, wavelengths)
 
 
+def _colour(value, shape) -> np.ndarray:
+    """A closure's colour as an array of ``shape`` (..., 3): three channels, or a colour of the program
+    (a baked table's)."""
+    if isinstance(value, tuple):
+        return np.stack([np.broadcast_to(x, shape[:-1]) for x in value], axis=-1)
+    return np.broadcast_to(np.asarray(value, dtype=float), shape)
+
+
 def evaluate_closures(result, n0, v, l, lobe_kind="beckmann", ng=None, bump_correction=True):
     """Cycles' evaluation of the closures for light ``l``: pixel per unit irradiance.
 
@@ -217,7 +225,7 @@ def evaluate_closures(result, n0, v, l, lobe_kind="beckmann", ng=None, bump_corr
     l = np.broadcast_to(np.asarray(l, dtype=float), n0.shape)
     out = np.zeros(n0.shape[:-1] + (3,))
     for cl in result.glossy:
-        w = np.maximum(np.stack([np.broadcast_to(x, n0.shape[:-1]) for x in cl.weight], axis=-1), 0.0)
+        w = np.maximum(_colour(cl.weight, n0.shape), 0.0)
         w = np.where((w.mean(axis=-1) >= CLOSURE_WEIGHT_CUTOFF)[..., None], w, 0.0)
         N = safe_normalize(np.asarray(cl.normal, dtype=float), n0)
         if bump_correction and ng is not None:
@@ -231,7 +239,7 @@ def evaluate_closures(result, n0, v, l, lobe_kind="beckmann", ng=None, bump_corr
         shadow = dot(n0, l) * dot(n0, N) * dot(N, l) < 0.0
         out += w * np.where(shadow, 0.0, val)[..., None]
     if result.diffuse is not None:
-        col = np.stack([np.broadcast_to(x, n0.shape[:-1]) for x in result.diffuse], axis=-1)
+        col = _colour(result.diffuse, n0.shape)
         col = np.where((np.maximum(col, 0).mean(axis=-1) >= CLOSURE_WEIGHT_CUTOFF)[..., None], np.maximum(col, 0), 0)
         out += col * (np.maximum(dot(n0, l), 0.0) / np.pi)[..., None]
     return out

@@ -50,6 +50,13 @@ def _grid(width: int, height: int, d_min, d_max):
     return v, d_min + (d_max - d_min) * T
 
 
+def held_values(params: LayeredParams, backend: str) -> dict:
+    """The shader's input values as the sockets of ``backend`` hold them (float32): what the shader reads,
+    and what reading a material's sockets back gives again."""
+    values = socket_values({spec.name: getattr(params, spec.name) for spec in iter_sockets()}, backend)
+    return {k: float(np.float32(v)) for k, v in values.items()}
+
+
 def _arithmetic(plan: EffectPlan) -> EffectPlan:
     return replace(plan, tables=False)
 
@@ -59,7 +66,7 @@ def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int
     from .program import shade  # the program's top imports the shading steps, this module among their users
 
     plan = _arithmetic(plan)
-    values = socket_values({spec.name: getattr(params, spec.name) for spec in iter_sockets()}, ShadingPoint.SOCKETS)
+    values = held_values(params, ShadingPoint.SOCKETS)
     n0 = np.zeros((height, width, 3))
     n0[..., 2] = 1.0
     pt = ShadingPoint(values, n0, n0, np.zeros_like(n0))
@@ -120,8 +127,20 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
 def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
     """What the tables of ``params`` for ``plan`` depend on, as a short digest: the table format, the
     plan, and every value the shader reads."""
-    values = {spec.name: getattr(params, spec.name) for spec in iter_sockets()}
     record = json.dumps({"format": TABLE_FORMAT, "plan": plan.key, "samples": [COS_SAMPLES, SAMPLES_PER_FRINGE],
-                         "values": values}, sort_keys=True)
+                         "values": held_values(params, "nodes")}, sort_keys=True)
     return hashlib.sha1(record.encode()).hexdigest()[:16]
 
+
+
+def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayout, texels: np.ndarray, n0, v, d):
+    """What the group reading these tables returns at points of upper normal ``n0``, view ``v`` and
+    thickness ``d`` (numpy arrays): the program's tabulated step on numpy, reading ``texels`` as
+    Cycles' Image Texture does (:func:`.ops_numpy.table_lookup`)."""
+    from .program import tabulated_shade
+
+    n0 = np.asarray(n0, dtype=float)
+    pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0), tables=texels)
+    P = clamped_inputs(pt, plan)
+    return tabulated_shade(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), pt.incoming(),
+                           np.asarray(d, dtype=float))
