@@ -32,7 +32,7 @@ EXT_ZIP = dist/layered_brdf-$(shell sed -n 's/^version *= *"\(.*\)"/\1/p' blende
 WHICH = $(PY) -c "import importlib.metadata as m, platform; \
     print('Blender', m.version('bpy'), '(bpy) on Python', platform.python_version(), 'in $(VENV)')"
 
-.PHONY: demo test bench bench-scene extension clean which generated band-fit looks-sheet
+.PHONY: demo test bench bench-scene gpu-check extension clean which generated band-fit looks-sheet
 
 $(STAMP): pyproject.toml
 	@test -n "$(PYTHON)" || { echo "Blender $(BLENDER) needs Python $(if $(filter 5.2,$(BLENDER)),3.13,3.11), not found" >&2; exit 1; }
@@ -67,6 +67,11 @@ bench: $(STAMP)
 # Render cost per sample on a realistic scene (Suzanne, HDRI + sun; Cycles CPU and EEVEE), 10-15 min.
 bench-scene: $(STAMP)
 	$(PY) benchmarks/bench_scene.py $(BENCH_ARGS)
+
+# On a machine with a GPU: the reference spheres rendered there against the CPU, pixel by pixel, and
+# the scene's cost per sample there (benchmarks/results/gpu_check.json); says so and passes without one.
+gpu-check: $(STAMP)
+	$(PY) benchmarks/gpu_check.py $(GPU_ARGS)
 
 # Every preset next to its nearest Principled BSDF + Thin Film on the look-dev shader ball:
 # docs/images/presets-vs-principled-thin-film.png (docs/looks.md), a minute or two.

@@ -12,13 +12,16 @@ compilation); repetitions are interleaved (rep 1: every variant, rep 2: every va
 ...), so slow drifts of a shared machine spread over all variants.  Ratios are of
 medians, within this one run.
 
-EEVEE (when it starts): the node group in RGB for two presets, and spectral 16 for one,
-against a plain Principled BSDF (Thin Film is Cycles-only): wall time of the first frame
+EEVEE (when it starts): the node group (tables and computed) for two presets, and spectral 16
+for one, against Principled BSDF with and without Thin Film: wall time of the first frame
 (shader compilation) and of the frames after it, and whether the render succeeded (a
 material that fails to compile renders magenta).
 
-Node counts: the nodes each node-group variant's group interprets, nested groups
-expanded (group input/output, reroute and frame nodes excluded).
+Node counts: the nodes each node-group variant's group interprets: those an output depends
+on, nested groups expanded (group input/output, reroute and frame nodes excluded).
+
+Tables: for each variant reading baked tables, the time of a bake (the shading program on
+numpy over the tables' texels, median of several) and the tables' size in memory.
 
 Writes benchmarks/results/scene_cost.json (every raw measurement) and prints a table.
 """
@@ -29,11 +32,11 @@ import json
 import os
 import tempfile
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
-from timing import DIFFUSE, GLOSSY, PRINCIPLED, cost_per_sample, machine_info, spread, stock_material, \
-    thin_film_inputs, timed_render
+from scene_variants import (REFERENCE, THIN_FILM_IOR, THIN_FILM_NM, Variant, floor_variants, layered_variant,
+                            layered_variants, stock_variants)
+from timing import DIFFUSE, cost_per_sample, machine_info, spread, stock_material, timed_render
 
 RESULTS = Path(__file__).resolve().parent / "results"
 OUT_JSON = RESULTS / "scene_cost.json"
@@ -45,144 +48,19 @@ SUN_STRENGTH = 3.0
 SUN_ROTATION_DEG = (50.0, 0.0, 30.0)
 CAMERA_LOCATION = (1.6, -4.6, 1.0)
 SEED = 0
-THIN_FILM_NM, THIN_FILM_IOR = 500.0, 1.33
-REFERENCE = "Principled BSDF + Thin Film"
 
-BACKENDS = ("nodes", "osl")
-SPECTRAL_PRESET = "fig6_medium"
+# "tables": the node group reading the material's baked tables; "nodes": the node group computing its
+# closures (Evaluation 'arithmetic'); "osl": the OSL shader.
+BACKENDS = ("tables", "nodes", "osl")
+SPECTRAL_PRESET = "fig4_parallel"  # parallel boundaries: every accuracy mode also reads baked tables
 
 DEFAULTS = dict(samples=(1, 6), reps=3, eevee_samples=4, eevee_frames=2)
 QUICK = dict(samples=(1, 3), reps=1, eevee_samples=1, eevee_frames=1, presets=(SPECTRAL_PRESET,),
              spectral_modes=("rgb",), eevee_presets=())
-EEVEE_PRESETS = ("fig6_medium", "glazed_clay")
-EEVEE_FAILING = (SPECTRAL_PRESET, "spectral16")  # known not to link in EEVEE: the check must see it
+EEVEE_PRESETS = ("oil_slick", "glazed_clay")
+EEVEE_FAILING = ("fig6_medium", "spectral16")  # computed closures known not to link in EEVEE: the check must see it
 MAGENTA_TOL = 0.1  # a pixel within this of (1, 0, 1) is Blender's "shader failed" colour
 MAGENTA_FAILED = 0.5  # the render failed when this fraction of the object's pixels is magenta
-
-
-# --- variants ---------------------------------------------------------------------------------
-@dataclass
-class Variant:
-    """One material to measure: a stock BSDF or the layered material of a preset."""
-
-    label: str
-    backend: str = "stock"  # "stock" (a Blender BSDF), "nodes" (the node group) or "osl"
-    preset: str | None = None
-    accuracy: str | None = None
-    material: object = field(default=None, repr=False)
-    optics: str | None = None
-    nodes: int | None = None  # nodes the layered node group interprets
-
-    @property
-    def osl(self) -> bool:
-        return self.backend == "osl"
-
-    def record(self) -> dict:
-        return dict(label=self.label, backend=self.backend, preset=self.preset, accuracy=self.accuracy,
-                    nodes=self.nodes, optics=self.optics)
-
-
-def stock_variants() -> list[Variant]:
-    """Blender's BSDFs, the reference first."""
-    specs = ((REFERENCE, PRINCIPLED, thin_film_inputs(THIN_FILM_NM, THIN_FILM_IOR)),
-             ("Principled BSDF", PRINCIPLED, {}), ("Glossy BSDF", GLOSSY, {}), ("Diffuse BSDF", DIFFUSE, {}))
-    return [kept_variant(label, stock_material(label, bsdf, inputs)) for label, bsdf, inputs in specs]
-
-
-def kept_variant(label: str, mat) -> Variant:
-    """A stock variant of the material ``mat``, kept in the file while other materials are in use."""
-    mat.use_fake_user = True
-    return Variant(label, material=mat)
-
-
-def closure_floor_material(label: str, glossy: int):
-    """The closures of a layered material and no arithmetic: a Diffuse BSDF and ``glossy``
-    Beckmann Glossy BSDFs (anisotropic, tangent from the Tangent node, constant colours and
-    roughness), added.  What Cycles spends on the closures alone, the floor of any node
-    group that builds them."""
-    import bpy
-
-    mat = bpy.data.materials.new(label)
-    nt = mat.node_tree
-    nt.nodes.clear()
-    tangent = nt.nodes.new("ShaderNodeTangent")
-    total = nt.nodes.new(DIFFUSE).outputs[0]
-    for k in range(glossy):
-        g = nt.nodes.new(GLOSSY)
-        g.distribution = "BECKMANN"
-        g.inputs["Color"].default_value = (0.3 + 0.2 * (k % 3), 0.5, 0.8 - 0.2 * (k % 3), 1.0)
-        g.inputs["Roughness"].default_value = 0.15 + 0.05 * k
-        g.inputs["Anisotropy"].default_value = 0.5
-        nt.links.new(tangent.outputs["Tangent"], g.inputs["Tangent"])
-        add = nt.nodes.new("ShaderNodeAddShader")
-        nt.links.new(total, add.inputs[0])
-        nt.links.new(g.outputs[0], add.inputs[1])
-        total = add.outputs[0]
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    nt.links.new(total, out.inputs["Surface"])
-    return mat
-
-
-#: The closure sets of the layered material: with dispersion (a reflected and three
-#: transmitted lobes) and with equal indices (one of each), each with the diffuse part.
-CLOSURE_FLOORS = (("closures alone: diffuse + 4 glossy (dispersion)", 4),
-                  ("closures alone: diffuse + 2 glossy (equal indices)", 2))
-
-
-def floor_variants() -> list[Variant]:
-    return [kept_variant(label, closure_floor_material(label, glossy)) for label, glossy in CLOSURE_FLOORS]
-
-
-def layered_variant(obj, preset_name: str, backend: str, accuracy: str, optics: str | None = None) -> Variant:
-    """The layered material of a preset (in ``optics``, default its own), built by the add-on on
-    ``obj`` and then kept aside."""
-    from layered_brdf_addon.blender.material import apply_layered_material
-    from layered_brdf_addon.model import preset
-
-    params = preset(preset_name).replace(accuracy=accuracy, **({"optics": optics} if optics else {}))
-    label = f"{preset_name} {accuracy} {params.optics} {backend}"
-    obj.material_slots[0].material = None  # so that the add-on makes a new material
-    mat = apply_layered_material(obj, params, backend, name=label)
-    mat.use_fake_user = True
-    v = Variant(label, backend, preset_name, accuracy, mat, optics=params.optics)
-    if backend == "nodes":
-        v.nodes = interpreted_nodes(mat.node_tree)
-    return v
-
-
-def layered_variants(obj, presets, backends, spectral_preset, spectral_modes, paper_optics=False) -> list[Variant]:
-    """Every preset x backend in its own accuracy mode (the paper's figures RGB, the artist
-    presets analytic), then the other accuracy modes of one preset; with ``paper_optics``, each
-    preset of physical optics also with the paper's (what thin-film optics cost)."""
-    from layered_brdf_addon.model import preset
-
-    combos = [(p, b, preset(p).accuracy) for p in presets for b in backends]
-    if paper_optics:
-        combos += [(p, b, preset(p).accuracy, "paper") for p in presets for b in backends
-                   if preset(p).optics == "physical"]
-    own = preset(spectral_preset).accuracy
-    combos += [(spectral_preset, b, m) for m in spectral_modes if m != own for b in backends]
-    if spectral_preset not in presets:
-        combos += [(spectral_preset, b, own) for b in backends if own in spectral_modes]
-    return [layered_variant(obj, *c) for c in combos]
-
-
-SKIPPED_NODES = {"NodeGroupInput", "NodeGroupOutput", "NodeReroute", "NodeFrame"}
-
-
-def interpreted_nodes(tree) -> int:
-    """Nodes Cycles/EEVEE evaluate in ``tree``: nested groups expanded (each use counts),
-    group input/output, reroute and frame nodes left out.  The material's own output and
-    AOV nodes count, as in any material."""
-    n = 0
-    for node in tree.nodes:
-        if node.bl_idname in SKIPPED_NODES:
-            continue
-        if node.bl_idname == "ShaderNodeGroup":
-            n += interpreted_nodes(node.node_tree) if node.node_tree is not None else 0
-        else:
-            n += 1
-    return n
 
 
 # --- scene -------------------------------------------------------------------------------------
@@ -364,9 +242,10 @@ def eevee_variants(obj, measured, presets, failing) -> list[Variant]:
     from layered_brdf_addon.model import preset
 
     by_key = {(v.preset, v.backend, v.accuracy): v for v in measured}
-    vs = [next(v for v in measured if v.label == "Principled BSDF")]
+    vs = [v for v in measured if v.label in (REFERENCE, "Principled BSDF")]
     for key in [(p, preset(p).accuracy) for p in presets] + ([failing] if failing else []):
-        vs.append(by_key.get((key[0], "nodes", key[1])) or layered_variant(obj, key[0], "nodes", key[1]))
+        for backend in ("tables", "nodes"):
+            vs.append(by_key.get((key[0], backend, key[1])) or layered_variant(obj, key[0], backend, key[1]))
     return vs
 
 
@@ -380,14 +259,15 @@ def table(d: dict) -> str:
              f"{s['reps']} interleaved repetitions; Blender {d['machine']['bpy']}, "
              f"{d['machine']['cpu_count']} CPUs; run took {d['seconds'] / 60:.0f} min.", "",
              "| material | backend | accuracy | optics | nodes interpreted | ms / sample min / median / max "
-             "| x Principled + Thin Film |", "|---|---|---|---|---|---|---|"]
+             "| x Principled + Thin Film | bake (ms) | tables (kB) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in d["cycles"]:
         p = r["per_sample"]
         flag = "" if r["magenta"] < MAGENTA_FAILED else " (magenta)"
         lines.append(f"| {r['preset'] or r['label']}{flag} | {r['backend']} | {r['accuracy'] or ''} | "
                      f"{r.get('optics') or ''} | {r['nodes'] if r['nodes'] is not None else ''} | "
                      f"{1e3 * p['min']:.0f} / {1e3 * p['median']:.0f} / {1e3 * p['max']:.0f} | "
-                     f"{r['vs_reference']:.2f} |")
+                     f"{r['vs_reference']:.2f} | {_cell(r.get('bake_ms'), '{:.1f}')} | "
+                     f"{_cell(r.get('table_bytes') and r['table_bytes'] / 1024, '{:.0f}')} |")
     e = d.get("eevee", {})
     lines.append("")
     if e.get("skipped"):
@@ -395,16 +275,20 @@ def table(d: dict) -> str:
         return "\n".join(lines)
     lines += [f"EEVEE ({e['engine']}, software GL, wall time): {e['samples']} samples per frame, "
               f"engine start-up {e['startup_wall']:.0f} s before these.", "",
-              "| material | accuracy | nodes | first frame (s) | later frames (s) | renders correctly |",
-              "|---|---|---|---|---|---|"]
+              "| material | backend | accuracy | nodes | first frame (s) | later frames (s) | renders correctly |",
+              "|---|---|---|---|---|---|---|"]
     for r in e["rows"]:
         fr = r.get("frame")
         later = f"{fr['median']:.1f}" if fr else ""
         first = f"{r['first_wall']:.1f}" if "first_wall" in r else ""
         ok = "yes" if r["ok"] else ("no: " + r.get("error", "magenta"))[:80]
-        lines.append(f"| {r['preset'] or r['label']} | {r['accuracy'] or ''} | "
+        lines.append(f"| {r['preset'] or r['label']} | {r['backend']} | {r['accuracy'] or ''} | "
                      f"{r['nodes'] if r['nodes'] is not None else ''} | {first} | {later} | {ok} |")
     return "\n".join(lines)
+
+
+def _cell(value, fmt: str) -> str:
+    return "" if value is None else fmt.format(value)
 
 
 def write_json(d: dict, path: Path = OUT_JSON) -> None:
@@ -421,7 +305,7 @@ def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="a ~1 minute smoke run (2 presets, 1 rep, tiny samples)")
     ap.add_argument("--presets", nargs="*", help="presets to measure (default: all)")
-    ap.add_argument("--backends", nargs="*", choices=BACKENDS, help="default: nodes osl")
+    ap.add_argument("--backends", nargs="*", choices=BACKENDS, help="default: tables nodes osl")
     ap.add_argument("--reps", type=int, help=f"interleaved repetitions (default {DEFAULTS['reps']})")
     ap.add_argument("--samples", type=int, nargs=2, metavar=("LO", "HI"),
                     help=f"the two sample counts (default {DEFAULTS['samples']})")

@@ -56,9 +56,11 @@ def sphere_points(params: LayeredParams):
     return n0, lower_normal(params, n0, p_obj, d), d, geo.view
 
 
-def closure_error(params: LayeredParams, hdri: str, samples: int = SAMPLES, seed: int = 0) -> dict:
-    """L1 distance of the closure form from the exact model, relative to the exact model's L1,
-    over a sphere under ``hdri``; and both mean pixels."""
+def closure_error(params: LayeredParams, hdri: str, samples: int = SAMPLES, seed: int = 0,
+                  shading=closure_shading) -> dict:
+    """L1 distance of the closure form (or of another ``shading``, e.g. baked tables:
+    :func:`.fitted_tables.table_shading`) from the exact model, relative to the exact model's L1,
+    over a sphere under ``hdri`` (thickness by height); and both mean pixels."""
     params = params.replace(thickness_mode="height")
     n0, n1, d, view = sphere_points(params)
     image = hdri_image(hdri)
@@ -68,6 +70,6 @@ def closure_error(params: LayeredParams, hdri: str, samples: int = SAMPLES, seed
 
     common = dict(samples=samples, seed=seed, environment=environment)
     exact = environment_shading(params, n0, n1, d, view, **common)
-    closure = environment_shading(params, n0, n1, d, view, shading=closure_shading, **common)
+    closure = environment_shading(params, n0, n1, d, view, shading=shading, **common)
     return dict(l1=float(np.abs(closure - exact).sum() / max(np.abs(exact).sum(), 1e-12)),
                 exact=exact.mean(0), closure=closure.mean(0))

@@ -10,6 +10,7 @@ import pytest
 
 from layered_brdf_addon.blender.lookdev import (GROOVE_DEPTH, build_lookdev_scene, eevee_engine, hdri_folder,
                                                 hdri_path, principled_thin_film, remove_scene, thin_film_equivalent)
+from layered_brdf_addon.blender import tables
 from layered_brdf_addon.blender.material import apply_layered_material
 from layered_brdf_addon.blender.scene import render_passes
 from layered_brdf_addon.model.params import ParameterError
@@ -82,9 +83,13 @@ def test_renders_a_layered_preset_and_leaves_no_datablocks_behind():
     assert added["scenes"] and added["objects"] and added["worlds"] and added["images"]
     remove_scene(scene)
     left = {c: datablocks()[c] - before[c] for c in COLLECTIONS}
-    # only what the caller made is left: the material applied to the ball and its node groups
+    # only what the caller made is left: the material applied to the ball, its node groups and their
+    # baked tables
     assert left["materials"] == {mat.as_pointer()}
-    assert all(not left[c] for c in COLLECTIONS if c not in ("materials", "node_groups"))
+    tables_read = {n.image.as_pointer() for g in bpy.data.node_groups for n in g.nodes
+                   if n.bl_idname == "ShaderNodeTexImage" and n.image is not None and tables.DIGEST_KEY in n.image}
+    assert left["images"] <= tables_read
+    assert all(not left[c] for c in COLLECTIONS if c not in ("materials", "node_groups", "images"))
     bpy.data.materials.remove(mat)
 
 

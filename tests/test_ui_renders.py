@@ -107,6 +107,7 @@ def test_keyframed_thickness_renders_each_frame_like_the_closure_form():
             sock = param_socket(node, name)[0]
             sock.default_value = d
             sock.keyframe_insert("default_value", frame=frame)
+    bpy.context.view_layer.update()  # what follows each edit in Blender's UI: the handler re-plans
     scene = bpy.context.scene
     scene.frame_set(1)
     bpy.context.view_layer.update()

@@ -25,6 +25,7 @@ from .library_folder import LIBRARY_FILE, Staging, check_directory, commit, read
 from .lookdev import hdri_path
 from .material_values import settings
 from .stored_keys import MATERIAL_KEY, SETTINGS
+from .tables import unused_tables
 
 LIBRARY_NAME = "Layered BRDF Looks"  # its name in Preferences > File Paths > Asset Libraries
 
@@ -184,7 +185,8 @@ def write_library(directory, presets=None, preview_size: int = assets.PREVIEW_SI
 
 
 def _remove_made(made, before_groups: set, before_texts: set) -> None:
-    """Remove the looks made for the library and the add-on data only they used."""
+    """Remove the looks made for the library and the add-on data only they used (their groups, OSL
+    texts and baked tables)."""
     for mat in made:
         try:
             bpy.data.materials.remove(mat)
@@ -198,6 +200,8 @@ def _remove_made(made, before_groups: set, before_texts: set) -> None:
         bpy.data.node_groups.remove(stale[0])
     for t in [t for t in bpy.data.texts if t.as_pointer() not in before_texts and t.users == 0]:
         bpy.data.texts.remove(t)
+    for image in unused_tables():  # the looks' baked tables (stamped), read by no group any more
+        bpy.data.images.remove(image)
 
 
 # --- Preferences > File Paths > Asset Libraries --------------------------------------------------

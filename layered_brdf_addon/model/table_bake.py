@@ -18,12 +18,13 @@ from . import ops_numpy
 from .ops_numpy import ShadingPoint
 from .params import WAVELENGTHS_NM, LayeredParams, iter_sockets, socket_values
 from .plan import EffectPlan
+from .program import shade, tabulated_shade
 from .shading.base_shader import passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
 from .shading.tables import COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, NotTabulable, TableLayout, tabulable
 from .shading.thin_film import harmonic_count
 
-SAMPLES_PER_FRINGE = 16  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
+SAMPLES_PER_FRINGE = 24  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
 MIN_THICKNESS_SAMPLES = 8
 MAX_THICKNESS_SAMPLES = 160  # six images of 64 x 160 RGBA float32: under 1 MB
 SHORTEST_NM = 400.0  # the bluest wavelength a plan evaluates (spectral modes reach below the RGB channels' 465 nm)
@@ -50,11 +51,15 @@ def _grid(width: int, height: int, d_min, d_max):
     return v, d_min + (d_max - d_min) * T
 
 
-def held_values(params: LayeredParams, backend: str) -> dict:
+def held_values(params: LayeredParams, backend: str, plan: EffectPlan | None = None) -> dict:
     """The shader's input values as the sockets of ``backend`` hold them (float32): what the shader reads,
-    and what reading a material's sockets back gives again."""
+    and what reading a material's sockets back gives again.  With ``plan``, only those it reads: a layer
+    given by its IOR and Dispersion does not read the three indices (derived from them, they may differ in
+    their last bit once read back), one given by its three indices not the IOR and Dispersion."""
     values = socket_values({spec.name: getattr(params, spec.name) for spec in iter_sockets()}, backend)
-    return {k: float(np.float32(v)) for k, v in values.items()}
+    unread = () if plan is None else ("layer_ior", "layer_dispersion") if plan.index == "channels" else \
+        ("r1_r", "r1_g", "r1_b")
+    return {k: float(np.float32(v)) for k, v in values.items() if k not in unread}
 
 
 def _arithmetic(plan: EffectPlan) -> EffectPlan:
@@ -63,8 +68,6 @@ def _arithmetic(plan: EffectPlan) -> EffectPlan:
 
 def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int):
     """The program's closures at the texels (:func:`_grid`), and the Base Shader's factor."""
-    from .program import shade  # the program's top imports the shading steps, this module among their users
-
     plan = _arithmetic(plan)
     values = held_values(params, ShadingPoint.SOCKETS)
     n0 = np.zeros((height, width, 3))
@@ -128,7 +131,7 @@ def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
     """What the tables of ``params`` for ``plan`` depend on, as a short digest: the table format, the
     plan, and every value the shader reads."""
     record = json.dumps({"format": TABLE_FORMAT, "plan": plan.key, "samples": [COS_SAMPLES, SAMPLES_PER_FRINGE],
-                         "values": held_values(params, "nodes")}, sort_keys=True)
+                         "values": held_values(params, "nodes", plan)}, sort_keys=True)
     return hashlib.sha1(record.encode()).hexdigest()[:16]
 
 
@@ -137,8 +140,6 @@ def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayou
     """What the group reading these tables returns at points of upper normal ``n0``, view ``v`` and
     thickness ``d`` (numpy arrays): the program's tabulated step on numpy, reading ``texels`` as
     Cycles' Image Texture does (:func:`.ops_numpy.table_lookup`)."""
-    from .program import tabulated_shade
-
     n0 = np.asarray(n0, dtype=float)
     pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0), tables=texels)
     P = clamped_inputs(pt, plan)

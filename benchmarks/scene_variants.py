@@ -1,0 +1,177 @@
+"""The materials the scene benchmark measures (benchmarks/bench_scene.py): Blender's BSDFs, the
+closures of a layered material alone, and the layered material of each preset as the node group
+reading its baked tables, the node group computing its closures, or the OSL shader; and how many
+nodes a group makes Cycles interpret.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from timing import DIFFUSE, GLOSSY, PRINCIPLED, stock_material, thin_film_inputs
+
+REFERENCE = "Principled BSDF + Thin Film"
+THIN_FILM_NM, THIN_FILM_IOR = 500.0, 1.33
+BAKE_REPS = 7  # bakes timed per tabulated variant (the median is reported)
+
+
+# --- variants ---------------------------------------------------------------------------------
+@dataclass
+class Variant:
+    """One material to measure: a stock BSDF or the layered material of a preset."""
+
+    label: str
+    backend: str = "stock"  # "stock" (a Blender BSDF), "nodes" (the node group) or "osl"
+    preset: str | None = None
+    accuracy: str | None = None
+    material: object = field(default=None, repr=False)
+    optics: str | None = None
+    nodes: int | None = None  # nodes the layered node group interprets
+    bake_ms: float | None = None  # a bake of the material's tables (tables variants)
+    table_bytes: int | None = None  # the tables' texels in memory
+
+    @property
+    def osl(self) -> bool:
+        return self.backend == "osl"
+
+    def record(self) -> dict:
+        return dict(label=self.label, backend=self.backend, preset=self.preset, accuracy=self.accuracy,
+                    nodes=self.nodes, optics=self.optics, bake_ms=self.bake_ms, table_bytes=self.table_bytes)
+
+
+def stock_variants() -> list[Variant]:
+    """Blender's BSDFs, the reference first."""
+    specs = ((REFERENCE, PRINCIPLED, thin_film_inputs(THIN_FILM_NM, THIN_FILM_IOR)),
+             ("Principled BSDF", PRINCIPLED, {}), ("Glossy BSDF", GLOSSY, {}), ("Diffuse BSDF", DIFFUSE, {}))
+    return [kept_variant(label, stock_material(label, bsdf, inputs)) for label, bsdf, inputs in specs]
+
+
+def kept_variant(label: str, mat) -> Variant:
+    """A stock variant of the material ``mat``, kept in the file while other materials are in use."""
+    mat.use_fake_user = True
+    return Variant(label, material=mat)
+
+
+def closure_floor_material(label: str, glossy: int):
+    """The closures of a layered material and no arithmetic: a Diffuse BSDF and ``glossy``
+    Beckmann Glossy BSDFs (anisotropic, tangent from the Tangent node, constant colours and
+    roughness), added.  What Cycles spends on the closures alone, the floor of any node
+    group that builds them."""
+    import bpy
+
+    mat = bpy.data.materials.new(label)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    tangent = nt.nodes.new("ShaderNodeTangent")
+    total = nt.nodes.new(DIFFUSE).outputs[0]
+    for k in range(glossy):
+        g = nt.nodes.new(GLOSSY)
+        g.distribution = "BECKMANN"
+        g.inputs["Color"].default_value = (0.3 + 0.2 * (k % 3), 0.5, 0.8 - 0.2 * (k % 3), 1.0)
+        g.inputs["Roughness"].default_value = 0.15 + 0.05 * k
+        g.inputs["Anisotropy"].default_value = 0.5
+        nt.links.new(tangent.outputs["Tangent"], g.inputs["Tangent"])
+        add = nt.nodes.new("ShaderNodeAddShader")
+        nt.links.new(total, add.inputs[0])
+        nt.links.new(g.outputs[0], add.inputs[1])
+        total = add.outputs[0]
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(total, out.inputs["Surface"])
+    return mat
+
+
+#: The closure sets of the layered material: with dispersion (a reflected and three
+#: transmitted lobes) and with equal indices (one of each), each with the diffuse part.
+CLOSURE_FLOORS = (("closures alone: diffuse + 4 glossy (dispersion)", 4),
+                  ("closures alone: diffuse + 2 glossy (equal indices)", 2))
+
+
+def floor_variants() -> list[Variant]:
+    return [kept_variant(label, closure_floor_material(label, glossy)) for label, glossy in CLOSURE_FLOORS]
+
+
+def layered_variant(obj, preset_name: str, backend: str, accuracy: str, optics: str | None = None) -> Variant:
+    """The layered material of a preset (in ``optics``, default its own), built by the add-on on
+    ``obj`` and then kept aside."""
+    from layered_brdf_addon.blender.material import apply_layered_material
+    from layered_brdf_addon.model import preset
+
+    evaluation = "tables" if backend == "tables" else "arithmetic"
+    params = preset(preset_name).replace(accuracy=accuracy, evaluation=evaluation,
+                                         **({"optics": optics} if optics else {}))
+    label = f"{preset_name} {accuracy} {params.optics} {backend}"
+    obj.material_slots[0].material = None  # so that the add-on makes a new material
+    mat = apply_layered_material(obj, params, "osl" if backend == "osl" else "nodes", name=label)
+    mat.use_fake_user = True
+    v = Variant(label, backend, preset_name, accuracy, mat, optics=params.optics)
+    if backend != "osl":
+        v.nodes = interpreted_nodes(mat.node_tree)
+    if backend == "tables":
+        v.bake_ms, v.table_bytes = bake_cost(params)
+    return v
+
+
+def bake_cost(params) -> tuple[float | None, int | None]:
+    """Median wall time (ms) of a bake of ``params``'s tables, and their size in bytes; None where the
+    plan computes its closures (a tilted or thickness-following boundary)."""
+    import numpy as np
+
+    from layered_brdf_addon.model.policy import plan_effects
+    from layered_brdf_addon.model.table_bake import bake
+
+    plan = plan_effects(params)
+    if not plan.tables:
+        return None, None
+    times = []
+    for _ in range(BAKE_REPS):
+        t = time.perf_counter()
+        _, texels = bake(params, plan)
+        times.append(time.perf_counter() - t)
+    return 1e3 * float(np.median(times)), int(texels.nbytes)
+
+
+def layered_variants(obj, presets, backends, spectral_preset, spectral_modes, paper_optics=False) -> list[Variant]:
+    """Every preset x backend in its own accuracy mode (the paper's figures RGB, the artist
+    presets analytic), then the other accuracy modes of one preset; with ``paper_optics``, each
+    preset of physical optics also with the paper's (what thin-film optics cost)."""
+    from layered_brdf_addon.model import preset
+
+    combos = [(p, b, preset(p).accuracy) for p in presets for b in backends]
+    if paper_optics:
+        combos += [(p, b, preset(p).accuracy, "paper") for p in presets for b in backends
+                   if preset(p).optics == "physical"]
+    own = preset(spectral_preset).accuracy
+    combos += [(spectral_preset, b, m) for m in spectral_modes if m != own for b in backends]
+    if spectral_preset not in presets:
+        combos += [(spectral_preset, b, own) for b in backends if own in spectral_modes]
+    return [layered_variant(obj, *c) for c in combos]
+
+
+SKIPPED_NODES = {"NodeGroupInput", "NodeGroupOutput", "NodeReroute", "NodeFrame"}
+
+
+OUTPUT_NODES = {"ShaderNodeOutputMaterial", "ShaderNodeOutputAOV", "NodeGroupOutput"}
+
+
+def interpreted_nodes(tree) -> int:
+    """Nodes Cycles/EEVEE evaluate in ``tree``: those an output depends on (a node nothing reads is
+    never compiled), nested groups expanded (each use counts, the part of the group its used outputs
+    need), group input/output, reroute and frame nodes left out.  The material's own output and
+    AOV nodes count, as in any material."""
+    outputs = [n for n in tree.nodes if n.bl_idname in OUTPUT_NODES]
+    seen, stack = set(), list(outputs)
+    while stack:
+        node = stack.pop()
+        if node.as_pointer() in seen:
+            continue
+        seen.add(node.as_pointer())
+        stack += [link.from_node for sock in node.inputs for link in sock.links if not link.is_muted]
+    n = 0
+    for node in tree.nodes:
+        if node.as_pointer() not in seen or node.bl_idname in SKIPPED_NODES:
+            continue
+        if node.bl_idname == "ShaderNodeGroup":
+            n += interpreted_nodes(node.node_tree) if node.node_tree is not None else 0
+        else:
+            n += 1
+    return n
