@@ -34,20 +34,25 @@ def main() -> None:
     ap.add_argument("hdris", nargs="*", default=list(HDRIS))
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args()
-    head = ["case", "optics", "fit (s)"] + [f"L1 {h}: computed / tables / fitted" for h in args.hdris]
+    head = ["case", "optics", "fit (s): weights / with widths"] + \
+        [f"L1 {h}: computed / tables / fitted weights / with widths" for h in args.hdris]
     rows = []
     for name, p in cases().items():
         p = p.replace(thickness_mode="height")  # what the HDRI measurement renders
         plan = replace(plan_effects(p), tables=True)
-        t = time.perf_counter()
-        layout, texels, fitted = fit_tables(p, plan)
-        seconds = time.perf_counter() - t
+        seconds, fits = [], []
+        for widths in (False, True):
+            t = time.perf_counter()
+            layout, texels, fitted = fit_tables(p, plan, fit_widths=widths)
+            seconds.append(time.perf_counter() - t)
+            fits.append(fitted)
         cells = []
         for h in args.hdris:
-            errors = [closure_error(p, h)["l1"], closure_error(p, h, shading=table_shading(plan, layout, texels))["l1"],
-                      closure_error(p, h, shading=table_shading(plan, layout, fitted))["l1"]]
+            shadings = [None, texels, *fits]
+            errors = [closure_error(p, h, **({} if x is None else {"shading": table_shading(plan, layout, x)}))["l1"]
+                      for x in shadings]
             cells.append(" / ".join(f"{100 * e:.1f}%" for e in errors))
-        rows.append([name, p.optics, f"{seconds:.1f}"] + cells)
+        rows.append([name, p.optics, " / ".join(f"{x:.1f}" for x in seconds)] + cells)
         print(rows[-1], flush=True)
     print(table(head, rows, args.markdown))
 

@@ -64,7 +64,7 @@ def cost_table() -> str:
     return "\n".join(out)
 
 
-def scene_modes_table(preset: str = "fig6_medium") -> str:
+def scene_modes_table(preset: str = "fig4_parallel") -> str:
     """Cost per sample of ``preset`` in every accuracy mode and backend on the realistic scene
     (``scene_cost.json``): against the same backend's RGB group and Principled + Thin Film."""
     d = json.loads((HERE / "scene_cost.json").read_text())
@@ -77,6 +77,35 @@ def scene_modes_table(preset: str = "fig6_medium") -> str:
         nodes = f"{r['nodes']:,}" if r.get("nodes") is not None else ""
         out.append(f"| {r['accuracy']} | {r['backend']} | {nodes} | {ms * 1e3:.0f} | {ms / rgb[r['backend']]:.2f} | "
                    f"{r['vs_reference']:.2f} |")
+    return "\n".join(out)
+
+
+def scene_presets_table() -> str:
+    """Cost per sample of each preset in its own accuracy mode on the realistic scene (``scene_cost.json``):
+    the node group reading baked tables, the group computing, OSL; against Principled + Thin Film, with
+    the tables' bake time and size."""
+    from layered_brdf_addon.model.presets import preset
+
+    d = json.loads((HERE / "scene_cost.json").read_text())
+    rows = {}
+    for r in d["cycles"]:
+        name = r.get("preset")
+        if name and r["accuracy"] == preset(name).accuracy and r.get("optics") == preset(name).optics:
+            rows.setdefault(name, {})[r["backend"]] = r
+    out = ["| preset | accuracy | tables: nodes, x P+TF | computed: nodes, x P+TF | OSL: x P+TF | bake (ms) "
+           "| tables (kB) |", "|---|---|---|---|---|---|---|"]
+    for name, by in rows.items():
+        t, n, o = by.get("tables"), by.get("nodes"), by.get("osl")
+        baked = t is not None and t.get("bake_ms") is not None
+        cells = [name, preset(name).accuracy]
+        for r in (t, n):
+            cells.append("" if r is None else f"{r['nodes']:,}, {r['vs_reference']:.2f}")
+        if t is not None and not baked:
+            cells[2] = f"computes ({cells[2]})"
+        cells.append("" if o is None else f"{o['vs_reference']:.2f}")
+        cells.append(f"{t['bake_ms']:.1f}" if baked else "")
+        cells.append(f"{t['table_bytes'] / 1024:.0f}" if baked else "")
+        out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out)
 
 

@@ -101,6 +101,5 @@ class EffectPlan:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")
         if self.tables:
-            out.append("the closures' weights, widths and anisotropy read from tables baked for the material's "
-                       "values (over the view's angle and the thickness), not computed per point")
+            out.append("closures read from tables baked for the material's values (view angle x thickness)")
         return out
