@@ -26,20 +26,24 @@ from .shading.thin_film import harmonic_count
 
 SAMPLES_PER_FRINGE = 24  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
 MIN_THICKNESS_SAMPLES = 8
-MAX_THICKNESS_SAMPLES = 160  # six images of 64 x 160 RGBA float32: under 1 MB
+MAX_TABLE_BYTES = 1 << 20  # a material's tables, at most (float32 RGBA texels)
+MAX_THICKNESS_SAMPLES = 1024
 SHORTEST_NM = 400.0  # the bluest wavelength a plan evaluates (spectral modes reach below the RGB channels' 465 nm)
 
 
-def thickness_samples(params: LayeredParams, plan: EffectPlan) -> int:
+def thickness_samples(params: LayeredParams, plan: EffectPlan, images: int = 1) -> int:
     """Texels along the thickness: 1 for a constant one, else enough for :data:`SAMPLES_PER_FRINGE` per fringe
     (a fringe is ``lambda / (2 r1)`` of thickness at normal incidence, the shortest; the beams that bounce
-    inside the layer add harmonics), within [:data:`MIN_THICKNESS_SAMPLES`, :data:`MAX_THICKNESS_SAMPLES`]."""
+    inside the layer add harmonics), at least :data:`MIN_THICKNESS_SAMPLES`, at most what keeps ``images``
+    images of :data:`COS_SAMPLES` texels a row within :data:`MAX_TABLE_BYTES` (and
+    :data:`MAX_THICKNESS_SAMPLES`)."""
     if plan.thickness == "constant":
         return 1
     if not plan.interference:
         return MIN_THICKNESS_SAMPLES
     fringes = 2.0 * max(params.r1) * abs(params.d_max - params.d_min) / SHORTEST_NM * harmonic_count(plan)
-    return int(min(max(math.ceil(SAMPLES_PER_FRINGE * fringes) + 1, MIN_THICKNESS_SAMPLES), MAX_THICKNESS_SAMPLES))
+    most = min(MAX_TABLE_BYTES // (images * COS_SAMPLES * 16), MAX_THICKNESS_SAMPLES)
+    return int(min(max(math.ceil(SAMPLES_PER_FRINGE * fringes) + 1, MIN_THICKNESS_SAMPLES), most))
 
 
 def _grid(width: int, height: int, d_min, d_max):
@@ -97,7 +101,9 @@ def table_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
     """The layout of ``params``'s tables for ``plan`` (NotTabulable where the plan's closures depend on more)."""
     if not tabulable(plan):
         raise NotTabulable(f"plan {plan.key}: the closures depend on more than the view and the thickness")
-    return TableLayout(_closures(replace(plan, tables=False)), COS_SAMPLES, thickness_samples(params, plan))
+    closures = _closures(replace(plan, tables=False))
+    images = TableLayout(closures, COS_SAMPLES, 1).images
+    return TableLayout(closures, COS_SAMPLES, thickness_samples(params, plan, images))
 
 
 def _plane(x, shape) -> np.ndarray:
