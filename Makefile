@@ -64,7 +64,7 @@ band-fit: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reference.py
 
-# Render cost per sample on a realistic scene (Suzanne, HDRI + sun; Cycles CPU and EEVEE), 10-15 min.
+# Render cost per sample on a realistic scene (Suzanne, HDRI + sun; Cycles CPU and EEVEE), about 25 min.
 bench-scene: $(STAMP)
 	$(PY) benchmarks/bench_scene.py $(BENCH_ARGS)
 
