@@ -183,3 +183,22 @@ def test_a_file_renders_the_same_without_the_add_on_and_from_a_library(tmp_path)
             print(f"sphere {k} {label}: {ag}")
             assert ag.failing_fraction == 0.0, (k, label, ag)
         assert expected[geo.sphere == k].max() > 0.05
+
+
+def test_a_change_of_the_row_count_keeps_the_node_s_values_links_and_the_group_s_name():
+    mat = _apply(add_sphere(), OIL)
+    node = shader_node(mat)
+    name = node.node_tree.name
+    base = mat.node_tree.nodes.new("ShaderNodeBsdfTransparent")  # the artist's own shader under the film
+    mat.node_tree.links.new(base.outputs[0], node.inputs["Base Shader"])
+    node.inputs[group_socket_name(LayeredParams.spec("ks"))].default_value = 0.4
+    rows = node_group_builder.table_nodes(node.node_tree)[0].image.size[1]
+    node.inputs[group_socket_name(LayeredParams.spec("d_max"))].default_value = 900.0  # more fringes: more rows
+    sync.sync_material(mat)
+    node = shader_node(mat)
+    assert node_group_builder.table_nodes(node.node_tree)[0].image.size[1] > rows
+    assert node.node_tree.name == name and params_of(mat).d_max == pytest.approx(900.0)
+    assert params_of(mat).ks == pytest.approx(0.4) and _current(mat)
+    assert node.inputs["Base Shader"].links[0].from_node == base
+    assert len([g for g in bpy.data.node_groups if tables.DIGEST_KEY in g]) == 1
+    assert len([i for i in bpy.data.images if tables.DIGEST_KEY in i]) == 4

@@ -257,6 +257,8 @@ def layout_record(layout) -> str:
 def build_into(group, plan: EffectPlan, layout=None) -> None:
     """(Re)build ``group``'s nodes for ``plan`` (with a plan for tables, for the tables of ``layout``,
     :class:`~..model.shading.tables.TableLayout`): idempotent, stamps version and plan."""
+    if plan.tables and layout is None:
+        raise ValueError(f"plan {plan.key} reads baked tables: its group needs their layout (table_layout)")
     group.nodes.clear()
     _interface(group)
     group.description = group_description(plan)

@@ -134,6 +134,7 @@ def write_library(directory, presets=None, preview_size: int = assets.PREVIEW_SI
     result = LibraryResult(directory=path, blend=path / LIBRARY_FILE, catalogs=path / CATALOG_FILE, assets=names)
     before_groups = {g.as_pointer() for g in bpy.data.node_groups}
     before_texts = {t.as_pointer() for t in bpy.data.texts}
+    before_images = {i.as_pointer() for i in bpy.data.images}
     renamed = []  # the file's own materials holding a look's name, renamed for the moment
     made = []
     staged = Staging(path, guard)
@@ -176,7 +177,7 @@ def write_library(directory, presets=None, preview_size: int = assets.PREVIEW_SI
         if guard is not None:
             guard.remove_cleanup(staged.discard)
         try:
-            _remove_made(made, before_groups, before_texts)
+            _remove_made(made, before_groups, before_texts, before_images)
         finally:
             for mat, name in renamed:
                 mat.name = name
@@ -184,9 +185,10 @@ def write_library(directory, presets=None, preview_size: int = assets.PREVIEW_SI
     return result
 
 
-def _remove_made(made, before_groups: set, before_texts: set) -> None:
+def _remove_made(made, before_groups: set, before_texts: set, before_images: set) -> None:
     """Remove the looks made for the library and the add-on data only they used (their groups, OSL
     texts and baked tables)."""
+    made_images = {i.as_pointer() for i in bpy.data.images} - before_images
     for mat in made:
         try:
             bpy.data.materials.remove(mat)
@@ -200,7 +202,7 @@ def _remove_made(made, before_groups: set, before_texts: set) -> None:
         bpy.data.node_groups.remove(stale[0])
     for t in [t for t in bpy.data.texts if t.as_pointer() not in before_texts and t.users == 0]:
         bpy.data.texts.remove(t)
-    for image in unused_tables():  # the looks' baked tables (stamped), read by no group any more
+    for image in unused_tables(among=made_images):  # the looks' baked tables, read by no group any more
         bpy.data.images.remove(image)
 
 

@@ -10,12 +10,15 @@ Each image records a checksum of its texels, so that a table whose pixels are no
 """
 from __future__ import annotations
 
+import hashlib
+import inspect
 import zlib
 
 import bpy
 import numpy as np
 
 from ..backends import node_group as node_group_builder
+from ..model import ops_numpy, table_bake
 from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
 from ..model.table_bake import bake, table_digest, table_layout
@@ -26,9 +29,24 @@ CHECKSUM_KEY = "layered_brdf_table_crc"  # on an image: checksum of the texels b
 IMAGE_PREFIX = ".Layered BRDF table"  # a leading "." keeps the images out of Blender's image menus
 
 
+_BAKE_STAMP = None
+
+
+def _bake_stamp() -> str:
+    """Digest of the code that bakes (the bake and the numpy ops it runs the program on; the program itself
+    is in the node group's stamp): a change to it makes every table stale."""
+    global _BAKE_STAMP
+    if _BAKE_STAMP is None:
+        h = hashlib.sha1()
+        for module in (table_bake, ops_numpy):
+            h.update(node_group_builder.code_without_docs(inspect.getsource(module)).encode())
+        _BAKE_STAMP = h.hexdigest()[:8]
+    return _BAKE_STAMP
+
+
 def wanted_digest(params: LayeredParams, plan: EffectPlan) -> str:
-    """The stamp of tables baked for ``params`` and ``plan`` by this version of the program."""
-    return f"{node_group_builder.build_stamp()}:{table_digest(params, plan)}"
+    """The stamp of tables baked for ``params`` and ``plan`` by this version of the program and of the bake."""
+    return f"{node_group_builder.build_stamp()}:{_bake_stamp()}:{table_digest(params, plan)}"
 
 
 def _checksum(texels: np.ndarray) -> str:
@@ -89,11 +107,13 @@ def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
         node = nodes[k]
         image = node.image
         if image is None or image.library is not None or image.users > 1 or DIGEST_KEY not in image or \
-                tuple(image.size) != (layout.width, layout.height):
+                tuple(image.size) != (layout.width, layout.height) or not image.is_float:
             image = _new_image(f"{IMAGE_PREFIX} {digest[-8:]} {k}", layout.width, layout.height)
             node.image = image
         else:
             image.name = f"{IMAGE_PREFIX} {digest[-8:]} {k}"
+            image.colorspace_settings.name = "Non-Color"
+            image.alpha_mode = "CHANNEL_PACKED"
         image.pixels.foreach_set(texels[k].ravel())
         image.update()
         image.pack()
@@ -104,8 +124,9 @@ def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
 
 
 def _shared(group) -> bool:
-    """Whether another material (or a fake user) uses ``group`` besides the one node being updated."""
-    return group.users - 1 > 0
+    """Whether another material (or a fake user) uses ``group`` besides the one node being updated, or it
+    is linked from a library (not ours to change)."""
+    return group.users - 1 > 0 or group.library is not None
 
 
 def _existing(params: LayeredParams, plan: EffectPlan):
@@ -127,7 +148,9 @@ def ensure_tables(node, params: LayeredParams, plan: EffectPlan, check_pixels: b
     if tables_current(group, params, plan, check_pixels):
         return False
     layout = table_layout(params, plan)
-    same_shape = group.get(node_group_builder.TABLE_SHAPE_KEY) == node_group_builder.layout_record(layout)
+    # A group whose Image Texture nodes are not all there (an artist deleted one) counts as of another shape.
+    same_shape = group.get(node_group_builder.TABLE_SHAPE_KEY) == node_group_builder.layout_record(layout) and \
+        set(node_group_builder.table_nodes(group)) == set(range(layout.images))
     if same_shape and not _shared(group):
         _write(group, params, plan)
         return True
@@ -140,13 +163,19 @@ def ensure_tables(node, params: LayeredParams, plan: EffectPlan, check_pixels: b
         node_group_builder.build_into(fresh, plan, layout)
     for n in node_group_builder.table_nodes(fresh).values():
         n.image = None  # the copy's tables are its own
-    fresh.name = group.name
+    name = group.name
     _write(fresh, params, plan)
     node.node_tree = fresh
+    if group.users == 0 and group.library is None:
+        # Nothing else used the group it replaces (another number of rows: a drag of Thickness Max):
+        # the new one takes its name, and the old one's images go with the add-on's other unused data.
+        bpy.data.node_groups.remove(group)
+    fresh.name = name
     return True
 
 
-def unused_tables() -> list:
-    """The add-on's table images (stamped) that nothing uses any more."""
+def unused_tables(among=None) -> list:
+    """The add-on's table images (stamped) that nothing uses any more, not even a fake user (``among``: only
+    those whose pointers it holds)."""
     return [image for image in bpy.data.images if image.library is None and DIGEST_KEY in image
-            and image.users - int(image.use_fake_user) <= 0]
+            and image.users == 0 and (among is None or image.as_pointer() in among)]

@@ -11,8 +11,8 @@ float images over ``(cos_v, d)``, which the shader reads with one Image Texture 
 The images (:class:`TableLayout`): one per glossy closure (colour: its weight per channel;
 alpha: the Glossy BSDF's Roughness, ``sqrt(alpha)``), one for the diffuse colour and the Base
 Shader's factor, and the closures' anisotropies four to an image.  Texel ``(i, j)`` holds the
-values at ``cos_v = i / (W - 1)`` and ``d = d_min + (d_max - d_min) j / (H - 1)``; a lookup
-puts ``cos_v = 0`` and ``1`` on the first and last texels' centres.
+values at ``cos_v = (i / (W - 1))^2`` (denser towards grazing views) and ``d = d_min + (d_max -
+d_min) j / (H - 1)``; a lookup puts ``cos_v = 0`` and ``1`` on the first and last texels' centres.
 """
 from __future__ import annotations
 
