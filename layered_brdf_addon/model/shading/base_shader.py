@@ -39,11 +39,17 @@ def film_transmittance(ops, r1, r0, n2, k2, kd, cos_v, *, orders=1):
     return ops.minimum(ops.minimum(r, g), b) * (1.0 - kd)
 
 
+def base_receives_light(plan) -> bool:
+    """Whether the Base Shader gets any light under ``plan``: not under an absorbing lower medium (a
+    metal keeps what enters it) with thin-film optics."""
+    return plan.optics != "physical" or plan.passes
+
+
 def passed_to_base(ops, plan, inputs, v, n0):
     """The Base Shader's factor for ``plan``: ``1 - F(v)`` with the paper's optics, the film's
     :func:`film_transmittance` with thin-film optics, 0 where the lower medium absorbs (a metal
     keeps what enters it).  ``inputs``: the program's inputs (:func:`.inputs.program_inputs`)."""
-    if plan.optics == "physical" and not plan.passes:
+    if not base_receives_light(plan):
         return 0.0
     with ops.stage("What reaches the Base Shader: " + ("what the film neither reflects nor absorbs"
                                                         if plan.optics == "physical" else "1 - F(v)")):

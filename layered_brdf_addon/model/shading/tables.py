@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..plan import EffectPlan
+from .base_shader import base_receives_light
 from .closures import Closure, ShadingResult
 
 TABLE_FORMAT = 1  # what a texel holds (this module's layout); baked tables of another format are rebaked
@@ -71,9 +72,6 @@ class TableLayout:
         """(image, channel) of closure ``k``'s anisotropy."""
         return self.closure_images + 1 + k // 4, k % 4
 
-    def texels(self) -> int:
-        return self.images * self.width * self.height
-
 
 def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
     """The lookup's image coordinates at the shading point: ``cos_v`` along x, the thickness's place
@@ -93,16 +91,18 @@ def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d) -> 
     image ``k``'s colour and alpha at ``xy``), with the Base Shader's factor in ``extras``."""
     xy = table_coordinates(ops, layout, P, n0, v, d)
     res = ShadingResult()
-    aniso = []
-    for k in range(layout.anisotropy_images):
-        colour, alpha = ops.table(layout.closure_images + 1 + k, xy)
-        aniso += [*ops.components(colour), alpha]
+    anisotropies = {}  # image -> its four channels
     tangent = ops.cross(n0, v)
-    for k, (name, weighted) in enumerate(layout.closures):
+    for k, (name, _) in enumerate(layout.closures):
+        image, channel = layout.anisotropy_slot(k)
+        if image not in anisotropies:
+            colour, alpha = ops.table(image, xy)
+            anisotropies[image] = [*ops.components(colour), alpha]
         colour, roughness = ops.table(k, xy)
-        res.glossy.append(Closure(name, n0, None, roughness * roughness, colour, aniso[k], tangent, roughness))
+        res.glossy.append(Closure(name, n0, None, roughness * roughness, colour, anisotropies[image][channel],
+                                  tangent, roughness))
     colour, base = ops.table(layout.diffuse_image, xy)
     if plan.diffuse:
         res.diffuse = colour
-    res.extras["base_weight"] = base if plan.optics != "physical" or plan.passes else 0.0
+    res.extras["base_weight"] = base if base_receives_light(plan) else 0.0
     return res
