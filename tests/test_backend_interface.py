@@ -69,5 +69,4 @@ def test_every_backend_implements_every_operation(backend):
     for protocol, impl in ((ShadingOps, arithmetic), (SurfaceOps, point)):
         missing = [name for name in members(protocol) if not callable(getattr(impl, name, None))]
         assert not missing, f"{backend} lacks {missing} of {protocol.__name__}"
-    if backend != "OSL":  # the OSL shader computes its closures (osl_shader.shader_source drops tables)
-        assert callable(getattr(point, "table", None)), f"{backend} reads no baked tables"
+    assert callable(getattr(point, "table", None)), f"{backend} reads no baked tables"

@@ -37,7 +37,7 @@ def plain_object():
 
 def osl_built_for(mat, plan):
     node = shader_node(mat)
-    return node.bl_idname == "ShaderNodeScript" and node.script.as_string() == osl.source(plan)
+    return node.bl_idname == "ShaderNodeScript" and osl.text_current(node.script, params_of(mat), plan)
 
 
 

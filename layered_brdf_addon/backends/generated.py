@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from ..model.params import LayeredParams
@@ -28,7 +29,7 @@ NODE_GROUPS_DIR = ROOT / "node_groups"
 def default_plan() -> EffectPlan:
     """The default material's plan with its closures computed (the whole program; a material's
     tables are its own, baked in its file)."""
-    return plan_effects(LayeredParams(), backend="osl")
+    return replace(plan_effects(LayeredParams(), backend="osl"), tables=False)
 
 
 def node_group_file(plan: EffectPlan) -> Path:

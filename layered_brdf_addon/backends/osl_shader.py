@@ -4,7 +4,13 @@
 :class:`~.osl_ops.OslOps`: every step of the program becomes an OSL function of the same
 name, and the shader body is the program's top level.  The shader's parameters (names,
 defaults, ranges, help) come from the parameter definitions.  Each plan gets its own
-shader, with only the code its effects need.  bpy-free.
+shader, with only the code its effects need.
+
+A plan with tables (:mod:`..model.shading.tables`) reads its closures from a material's
+baked tables: ``tabulated_shader_source(plan, layout, texels)`` writes them into the shader
+as one constant array (OSL's ``texture()`` reads image files only, and a material's tables
+are packed in its .blend), read with the Image Texture node's own interpolation.  Such a
+shader is the material's own, like its tables.  bpy-free.
 """
 from __future__ import annotations
 
@@ -12,14 +18,17 @@ from dataclasses import replace
 
 import functools
 
+import numpy as np
+
 from ..model import program
 from ..model.params import (BASE_COLOR_DESCRIPTION, THICKNESS_DESCRIPTION, THICKNESS_SOCKET, LayeredParams,
                             group_socket_name, iter_group_sockets, iter_sockets, socket_default, socket_limits,
                             socket_name)
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
+from ..model.shading.tables import TableLayout
 from .osl_ops import OslOps
-from .osl_text import FunctionBody, Val, literal, run_capturing_locals
+from .osl_text import PREC_ATOM, FunctionBody, Val, literal, run_capturing_locals
 
 OSL_VERSION = 3  # 3: the base colour one colour parameter (BaseColor), no tint
 SHADER_NAME = "layered_brdf"
@@ -146,6 +155,54 @@ vector bump_normal(vector n, float h, float distance)
 }
 """
 
+TABLE_LIBRARY = """\
+/* ------------------------------------------------------------------ baked tables */
+
+/* The tables are held as running sums along d: image k's column i (the view's angle) at
+ * knot j (0..h, the edges of the texels along d) holds the sum of its first j texels,
+ * RGBA at t[((k * (h + 1) + j) * w + i) * 4].  At y (texel units along d) the sum is
+ * linear between knots, and past the ends grows by the edge texel's value per unit. */
+void table_sum(float t[], int w, int h, int k, int i, float y, output vector rgb, output float alpha)
+{
+  float yc = clamp(y, 0.0, (float)h);
+  int j = min((int)floor(yc), h - 1);
+  float f = yc - j;
+  int lo = ((k * (h + 1) + j) * w + i) * 4;
+  int hi = lo + w * 4;
+  vector c0 = vector(t[lo], t[lo + 1], t[lo + 2]);
+  vector c1 = vector(t[hi], t[hi + 1], t[hi + 2]);
+  rgb = mix(c0, c1, f) + (y - yc) * (c1 - c0);
+  alpha = mix(t[lo + 3], t[hi + 3], f) + (y - yc) * (t[hi + 3] - t[lo + 3]);
+}
+
+/* Image k of a material's baked tables at xy (0..1) averaged over `width` of y (the pixel's
+ * footprint; at least one texel): linear between the texels' centres ((i + 0.5) / w) along
+ * the view's angle and extended at the edges, as Blender's Image Texture node reads the
+ * node group's tables, and a box of `width` along d, the difference of two running sums
+ * (one texel wide it is linear interpolation between texel centres too). */
+void baked_table(float t[], int w, int h, int k, vector xy, float width, output vector rgb,
+                 output float alpha)
+{
+  float px = clamp(xy[0], -1.0, 2.0) * w - 0.5;
+  float fx = px - floor(px);
+  int x0 = clamp((int)floor(px), 0, w - 1);
+  int x1 = clamp((int)floor(px) + 1, 0, w - 1);
+  float y = clamp(xy[1], -1.0, 2.0) * h;
+  float box = max(min(width, 3.0) * h, 1.0);
+  vector s00, s01, s10, s11;
+  float a00, a01, a10, a11;
+  table_sum(t, w, h, k, x0, y - 0.5 * box, s00, a00);
+  table_sum(t, w, h, k, x0, y + 0.5 * box, s01, a01);
+  table_sum(t, w, h, k, x1, y - 0.5 * box, s10, a10);
+  table_sum(t, w, h, k, x1, y + 0.5 * box, s11, a11);
+  rgb = mix(s01 - s00, s11 - s10, fx) / box;
+  alpha = mix(a01 - a00, a11 - a10, fx) / box;
+}
+"""
+
+TABLES_ARRAY = "baked_tables"
+_TABLES_PLACEHOLDER = "\x03tables\x03"
+
 GLOSSY = {
     "beckmann": """\
 /* The glossy closure of a lobe about `Nc`: Beckmann microfacets, alpha_x along the
@@ -205,6 +262,29 @@ class ShaderOps(OslOps):
     def bump_normal(self, n, height, distance):
         return self.call_expr("bump_normal", (n, height, distance), "vector")
 
+    table_shape: tuple[int, int] | None = None  # (w, h) of the material's baked tables
+    table_footprint: bool = False  # average the tables over the pixel's footprint along d
+    _table_widths: dict | None = None
+
+    def table(self, k, xy):
+        """Image ``k`` of the material's baked tables at ``xy``: its colour and alpha (the tables are the
+        shader body's constant array, :data:`TABLES_ARRAY`), averaged over the pixel's footprint along
+        the thickness where the plan filters over it (``filterwidth``, as the computed shader does)."""
+        w, h = self.table_shape
+        widths = self._table_widths = self._table_widths or {}
+        if xy.token not in widths:
+            widths[xy.token] = self.emit("float", f"filterwidth({self.use(xy, PREC_ATOM)}[1])") \
+                if self.table_footprint else 0.0
+        width = widths[xy.token]
+        outs = []
+        for hint, kind in (("table_rgb", "vector"), ("table_alpha", "float")):
+            out = self.emit(kind, None)
+            self.body.by_token[out.token].hint = hint
+            outs.append(out)
+        self.raw(f"baked_table({TABLES_ARRAY}, {w}, {h}, {k}, {self.use(xy)}, {self.use(width)}, "
+                 f"{self.use(outs[0])}, {self.use(outs[1])});")
+        return tuple(outs)
+
 
 def _parameter_lines() -> list[str]:
     lines = ["normal Normal = N",
@@ -238,14 +318,53 @@ def _parameter_lines() -> list[str]:
 
 @functools.lru_cache(maxsize=64)
 def shader_source(plan: EffectPlan) -> str:
-    """The OSL source of the shader for ``plan`` (which computes its closures: a plan's tables are the
-    node group's)."""
+    """The OSL source of the shader for ``plan``, computing its closures (a plan's tables are a
+    material's own: :func:`tabulated_shader_source`)."""
+    return _source(replace(plan, tables=False))
+
+
+def tabulated_shader_source(plan: EffectPlan, layout: TableLayout, texels: np.ndarray) -> str:
+    """The OSL source of the shader for ``plan`` (with tables) reading ``texels`` (float32, images x H x W x
+    RGBA, :func:`~..model.table_bake.bake`), laid out as ``layout`` says."""
+    if not plan.tables:
+        raise ValueError(f"plan {plan.key} computes its closures: it reads no tables")
+    texels = np.ascontiguousarray(texels, dtype=np.float32)
+    if texels.shape != (layout.images, layout.height, layout.width, 4):
+        raise ValueError(f"texels of shape {texels.shape} for tables of {layout.images} images of "
+                         f"{layout.width} x {layout.height}")
+    src = _source(plan, layout)
+    return src.replace(_TABLES_PLACEHOLDER, _array_text(running_sums(texels)))
+
+
+def running_sums(texels: np.ndarray) -> np.ndarray:
+    """The tables as the OSL shader holds them: along d, the sums of the first 0..H texels (images x (H + 1)
+    x W x RGBA), summed in double precision."""
+    sums = np.zeros((texels.shape[0], texels.shape[1] + 1, *texels.shape[2:]))
+    sums[:, 1:] = np.cumsum(texels.astype(np.float64), axis=1)
+    return sums.astype(np.float32)
+
+
+def _array_text(values: np.ndarray) -> str:
+    """``values`` as an OSL initialiser list, eight significant digits (within a float's last bit or two),
+    16 to a line."""
+    words = np.char.mod("%.8g", values.ravel().astype(np.float64))
+    rows = [", ".join(words[i:i + 16]) for i in range(0, words.size, 16)]
+    return "\n      " + ",\n      ".join(rows) + "\n  "
+
+
+def _source(plan: EffectPlan, layout: TableLayout | None = None) -> str:
     check_backend("osl", plan.lobe)
-    plan = replace(plan, tables=False)
     ops = ShaderOps()
     body = FunctionBody(SHADER_NAME, code=program.layered_surface.__code__)
     ops._bodies.append(body)
-    res, local_names = run_capturing_locals(program.layered_surface, ops, {}, {"plan": plan})
+    if plan.tables:
+        ops.table_shape = (layout.width, layout.height)
+        ops.table_footprint = plan.analytic and plan.footprint
+        n = layout.images * (layout.height + 1) * layout.width * 4
+        ops.raw(f"/* The material's baked tables: {layout.images} images of {layout.width} x {layout.height} "
+                f"texels (the view's angle x d), RGBA, as running sums along d. */")
+        ops.raw(f"float {TABLES_ARRAY}[{n}] = {{{_TABLES_PLACEHOLDER}}};")
+    res, local_names = run_capturing_locals(program.layered_surface, ops, {}, {"plan": plan, "layout": layout})
     x = res.extras
     ops.raw("/* The artist's own shader under the layer receives what the top transmits, 1 - F(v). */")
     ops.raw(f"BSDF = {ops.use(x['base_weight'], 14)} * Base;")
@@ -258,15 +377,16 @@ def shader_source(plan: EffectPlan) -> str:
         # never used); Phong ignores them.
         a_x, a_y = (program.glossy_alphas(ops, cl.alpha, cl.anisotropy) if plan.lobe == "beckmann"
                     else (cl.alpha, cl.alpha))
-        ops.raw(f"BSDF += glossy_lobe({ops.use(cl.normal)}, {ops.use(cl.tangent)}, {ops.use(cl.exponent)}, "
+        ops.raw(f"BSDF += glossy_lobe({ops.use(cl.normal)}, {ops.use(cl.tangent)}, {ops.use(_exponent(cl))}, "
                 f"{ops.use(a_x)}, {ops.use(a_y)}, {_colour(ops, cl.weight)});  /* {cl.name} */")
     ops.raw(f"Thickness = {ops.use(x['thickness'])};")
     ops.raw(f"LowerNormal = {ops.use(x['lower_normal'])};")
     ops.raw(f"UpperNormal = {ops.use(x['upper_normal'])};")
-    reserved = {socket_name(s) for s in iter_sockets()} | set(SOCKET_NAMES.values())
+    reserved = {socket_name(s) for s in iter_sockets()} | set(SOCKET_NAMES.values()) | {TABLES_ARRAY}
     main = ops.resolve(body, local_names, reserved=reserved)
     params = ",\n                    ".join(_parameter_lines())
-    parts = [HEADER.format(key=plan.key, plan="; ".join(plan.describe())), LIBRARY, GLOSSY[plan.lobe],
+    parts = [HEADER.format(key=plan.key, plan="; ".join(plan.describe())), LIBRARY,
+             *((TABLE_LIBRARY,) if plan.tables else ()), GLOSSY[plan.lobe],
              "/* ------------------------------------------------------------------ the program's steps */\n",
              ops.source_of_functions(),
              "/* ------------------------------------------------------------------ the shader */\n",
@@ -275,6 +395,14 @@ def shader_source(plan: EffectPlan) -> str:
 
 
 def _colour(ops, rgb) -> str:
+    if isinstance(rgb, Val):  # a colour read from the tables
+        rgb = ops.components(rgb)
     if all(not isinstance(c, Val) for c in rgb) and len(set(rgb)) == 1:
         return f"color({literal(rgb[0])})"
     return f"color({', '.join(ops.use(c) for c in rgb)})"
+
+
+def _exponent(cl):
+    """A closure's Phong exponent, 0 where it has none (a tabulated closure has its width as an alpha: the
+    Beckmann lobe, which ignores the exponent)."""
+    return 0.0 if cl.exponent is None else cl.exponent

@@ -22,7 +22,7 @@ from .own_nodes import active_output, stamp
 from .slots import material_for
 from .sockets import find_socket, held_units, legacy_tint, node_damage, set_inputs, socket_parameter
 from .stored_keys import (AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL, BACKEND_KEY, BASE_CHANNELS, BUILD_KEY,
-                          ENUMS_KEY, OWN_PREFIX, ROLE_KEY, SHADER_NODE, TEXT_KEY, settings_record)
+                          ENUMS_KEY, OWN_PREFIX, ROLE_KEY, SHADER_NODE, settings_record)
 from .tables import ensure_tables, tables_current
 from .targets import params_argument, shown
 from .unit_conversion import link_converted
@@ -59,6 +59,8 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
             mat[BUILD_KEY] = build_key(backend, plan, params)
         if backend == "nodes" and plan.tables:
             ensure_tables(node, params, plan, check_pixels=True)
+        elif backend == "osl" and plan.tables:
+            osl_backend.ensure_text(node, params, plan)
         remove_unused_own_data()
     repair(mat, node)
     set_inputs(node, params)
@@ -79,16 +81,19 @@ def tree_current(mat, node, backend: str, plan: EffectPlan, params: LayeredParam
     ``backend``, ``plan`` and ``params`` makes: its build record says so, the node has every
     socket, and it runs this version's node group for ``plan`` (for a plan with tables, baked for
     ``params``; with ``check_sources``, their texels read back too; without ``tables``, whatever
-    its tables hold) or the OSL script (its source compared with the plan's only with
-    ``check_sources``)."""
+    its tables hold) or the OSL script (for a plan with tables, its text written for ``params``; its
+    source read back only with ``check_sources``; without ``tables``, any text of the plan's)."""
     if node is None or mat.get(BUILD_KEY) != build_key(backend, plan, params) or node_damage(node) is not None:
         return False
     if backend == "nodes":
         return node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and \
             node_group_builder.is_current(node.node_tree, plan) and \
             (not (tables and plan.tables) or tables_current(node.node_tree, params, plan, check_sources))
-    return node.bl_idname == "ShaderNodeScript" and node.script is not None and \
-        (not check_sources or node.script.as_string() == osl_backend.source(plan))
+    if node.bl_idname != "ShaderNodeScript" or node.script is None:
+        return False
+    if plan.tables and not tables:
+        return osl_backend.TABLES_KEY in node.script
+    return osl_backend.text_current(node.script, params, plan, check_sources)
 
 
 def _set_base_inputs(node, params: LayeredParams) -> None:
@@ -165,9 +170,7 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
     else:
         node = tree.nodes.new("ShaderNodeScript")
         node.mode = "INTERNAL"
-        text = osl_backend.text_for(plan)
-        text[TEXT_KEY] = True
-        osl_backend.compile_script_node(node, script=text)
+        osl_backend.compile_script_node(node, script=osl_backend.text_for(plan, params))
     node.name = name
     node.label = label
     node.width = width

@@ -1,32 +1,112 @@
-"""The OSL shader in Blender: an internal text per plan (it travels in the .blend), compiled
-into a Script node."""
+"""The OSL shader in Blender: an internal text (it travels in the .blend), compiled into a Script
+node.  A plan that computes its closures has one text for every material of that plan; a plan with
+tables has one per set of values, holding the tables baked for them (:mod:`.tables`), shared by the
+materials of those values and stamped with their digest."""
 from __future__ import annotations
 
+import hashlib
+import inspect
 import os
 import sys
+import zlib
 
 import bpy
 
-from ..backends.osl_shader import shader_source
+from ..backends import osl_ops, osl_shader, osl_text
+from ..backends.node_group import code_without_docs
+from ..backends.osl_shader import shader_source, tabulated_shader_source
+from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
+from ..model.table_bake import bake
 from . import paths, tempdirs
+from .stored_keys import TEXT_KEY
+from .tables import wanted_digest
+
+TABLES_KEY = "layered_brdf_osl_tables"  # on a text holding baked tables: the digest of what they were baked for
+SOURCE_CRC_KEY = "layered_brdf_osl_crc"  # on such a text: checksum of the source written into it
 
 
 def source(plan: EffectPlan) -> str:
-    """The OSL shader for ``plan``, written from the shading program."""
+    """The OSL shader for ``plan`` computing its closures, written from the shading program."""
     return shader_source(plan)
 
 
-def text_for(plan: EffectPlan):
-    """The internal text of the variant for ``plan``, created or refreshed."""
+_WRITER_STAMP = None
+
+
+def _writer_stamp() -> str:
+    """Digest of the code that writes OSL (the program itself is in the tables' stamp)."""
+    global _WRITER_STAMP
+    if _WRITER_STAMP is None:
+        h = hashlib.sha1()
+        for module in (osl_shader, osl_ops, osl_text):
+            h.update(code_without_docs(inspect.getsource(module)).encode())
+        _WRITER_STAMP = h.hexdigest()[:8]
+    return _WRITER_STAMP
+
+
+def tables_digest(params: LayeredParams, plan: EffectPlan) -> str:
+    """The stamp of a text holding the tables of ``params`` for ``plan``, written by this version."""
+    return f"osl{osl_shader.OSL_VERSION}:{_writer_stamp()}:{wanted_digest(params, plan)}"
+
+
+def _crc(src: str) -> str:
+    return f"{zlib.crc32(src.encode()):08x}"
+
+
+def text_intact(text) -> bool:
+    """Whether a text holding tables still holds the source written into it (not edited by hand)."""
+    return text.get(SOURCE_CRC_KEY) == _crc(text.as_string())
+
+
+def text_current(text, params: LayeredParams, plan: EffectPlan, check_sources: bool = True) -> bool:
+    """Whether ``text`` is the shader a build for ``plan`` and ``params`` writes (its source read back only
+    with ``check_sources``)."""
+    if text is None:
+        return False
+    if not plan.tables:
+        return TABLES_KEY not in text and (not check_sources or text.as_string() == source(plan))
+    return text.get(TABLES_KEY) == tables_digest(params, plan) and (not check_sources or text_intact(text))
+
+
+def text_for(plan: EffectPlan, params: LayeredParams | None = None):
+    """The internal text of the shader for ``plan`` (and, for a plan with tables, the values ``params``),
+    created or refreshed; stamped as the add-on's."""
+    if plan.tables:
+        return _tables_text(plan, params or LayeredParams())
     name = f"layered_brdf_{plan.key}.osl"
     text = bpy.data.texts.get(name)
     src = source(plan)
-    if text is None:
+    if text is None or text.library is not None:
         text = bpy.data.texts.new(name)
     if text.as_string() != src:
         text.from_string(src)
+    text[TEXT_KEY] = True
     return text
+
+
+def _tables_text(plan: EffectPlan, params: LayeredParams):
+    """A text of this plan and these values: one already written (intact), or a new one with the tables baked."""
+    digest = tables_digest(params, plan)
+    for text in bpy.data.texts:
+        if text.library is None and text.get(TABLES_KEY) == digest and text_intact(text):
+            return text
+    layout, texels = bake(params, plan)
+    src = tabulated_shader_source(plan, layout, texels)
+    text = bpy.data.texts.new(f"layered_brdf_{plan.key}_{digest[-8:]}.osl")
+    text.from_string(src)
+    text[TEXT_KEY] = True
+    text[TABLES_KEY] = digest
+    text[SOURCE_CRC_KEY] = _crc(src)
+    return text
+
+
+def ensure_text(node, params: LayeredParams, plan: EffectPlan, check_sources: bool = True) -> bool:
+    """Give the Script ``node`` the text for ``plan`` and ``params`` (compiled); True when it changed."""
+    if text_current(node.script, params, plan, check_sources):
+        return False
+    compile_script_node(node, script=text_for(plan, params))
+    return True
 
 
 def _ensure_oslquery():

@@ -73,8 +73,8 @@ def supports(backend: str, lobe: str) -> bool:
 
 
 def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = "nodes") -> EffectPlan:
-    """The effects the shader must contain for ``p`` on every frame, and whether the node group
-    (``backend`` "nodes") reads its closures from baked tables: where ``p.evaluation`` is "tables",
+    """The effects the shader must contain for ``p`` on every frame, and whether the shader (the node
+    group or the OSL shader) reads its closures from baked tables: where ``p.evaluation`` is "tables",
     nothing is animated, the effects are planned and the plan's closures can be tabulated
     (:func:`~.shading.tables.tabulable`).
 
@@ -82,7 +82,7 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     linked sockets), and :data:`THICKNESS_LINKED` where the Thickness input is linked.  See docs/effect-planning.md.
     """
     animated = frozenset(animated)
-    tables = backend == "nodes" and p.evaluation == "tables" and p.effects == "planned" and not animated
+    tables = backend in BACKENDS and p.evaluation == "tables" and p.effects == "planned" and not animated
     if p.effects == "all":  # every effect stays, as if every socket could take any value
         animated |= {spec.name for spec in iter_sockets()}
 
