@@ -4,7 +4,9 @@ Where the layer's thickness varies within a pixel (a noise pattern seen from far
 each camera sample sees a different interference colour and a few samples per pixel
 turn the film into coloured noise; the converged pixel is their average.  The analytic
 mode integrates the interference over each colour channel's band, and in OSL also over
-the pixel's footprint (``filterwidth`` of the path difference, docs/spectral.md).
+the pixel's footprint (``filterwidth`` of the path difference, docs/spectral.md; reading baked
+tables, ``filterwidth`` of the thickness: a box along the tables' thickness axis).  Every
+variant reads the material's baked tables except the one marked "computed closures".
 
 One sphere 24 pixels across with Fig. 3's diffuse thin film (eq. 18) on a fine noise
 thickness (0-1,000 nm, several noise features per pixel), a sun at 40 degrees, Cycles'
@@ -47,10 +49,13 @@ def variants():
     from layered_brdf_addon.model.policy import plan_effects
 
     p = preset(PRESET).replace(accuracy="analytic", **MATERIAL)
-    plan = plan_effects(p)
+    plan = plan_effects(p)  # baked tables (the default Evaluation)
+    computed = p.replace(evaluation="arithmetic")
     rgb = p.replace(accuracy="rgb")
     flat = p.replace(d_min=500.0, d_max=500.0)
-    return [("analytic, band and pixel footprint", p, plan), (BAND_ONLY, p, replace(plan, footprint=False)),
+    return [("analytic, band and pixel footprint", p, plan),
+            ("analytic, band and pixel footprint, computed closures", computed, plan_effects(computed)),
+            (BAND_ONLY, p, replace(plan, footprint=False)),
             ("RGB (the paper's three wavelengths)", rgb, plan_effects(rgb)),
             ("control: constant 500 nm (the silhouette's noise)", flat, plan_effects(flat))]
 

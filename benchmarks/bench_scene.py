@@ -21,7 +21,8 @@ Node counts: the nodes each node-group variant's group interprets: those an outp
 on, nested groups expanded (group input/output, reroute and frame nodes excluded).
 
 Tables: for each variant reading baked tables, the time of a bake (the shading program on
-numpy over the tables' texels, median of several) and the tables' size in memory.
+numpy over the tables' texels, median of several) and the tables' size in memory; for the OSL
+shader reading them, also the time to write and compile its text (what a change of a value costs).
 
 Writes benchmarks/results/scene_cost.json (every raw measurement) and prints a table.
 """
@@ -50,8 +51,9 @@ CAMERA_LOCATION = (1.6, -4.6, 1.0)
 SEED = 0
 
 # "tables": the node group reading the material's baked tables; "nodes": the node group computing its
-# closures (Evaluation 'arithmetic'); "osl": the OSL shader.
-BACKENDS = ("tables", "nodes", "osl")
+# closures (Evaluation 'arithmetic'); "osl-tables": the OSL shader reading them; "osl": the OSL shader
+# computing.
+BACKENDS = ("tables", "nodes", "osl-tables", "osl")
 SPECTRAL_PRESET = "fig4_parallel"  # parallel boundaries: every accuracy mode also reads baked tables
 
 DEFAULTS = dict(samples=(1, 6), reps=3, eevee_samples=4, eevee_frames=2)
@@ -305,7 +307,7 @@ def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="a ~1 minute smoke run (2 presets, 1 rep, tiny samples)")
     ap.add_argument("--presets", nargs="*", help="presets to measure (default: all)")
-    ap.add_argument("--backends", nargs="*", choices=BACKENDS, help="default: tables nodes osl")
+    ap.add_argument("--backends", nargs="*", choices=BACKENDS, help="default: " + " ".join(BACKENDS))
     ap.add_argument("--reps", type=int, help=f"interleaved repetitions (default {DEFAULTS['reps']})")
     ap.add_argument("--samples", type=int, nargs=2, metavar=("LO", "HI"),
                     help=f"the two sample counts (default {DEFAULTS['samples']})")

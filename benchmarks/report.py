@@ -92,17 +92,18 @@ def scene_presets_table() -> str:
         name = r.get("preset")
         if name and r["accuracy"] == preset(name).accuracy and r.get("optics") == preset(name).optics:
             rows.setdefault(name, {})[r["backend"]] = r
-    out = ["| preset | accuracy | tables: nodes, x P+TF | computed: nodes, x P+TF | OSL: x P+TF | bake (ms) "
-           "| tables (kB) |", "|---|---|---|---|---|---|---|"]
+    out = ["| preset | accuracy | tables: nodes, x P+TF | computed: nodes, x P+TF | OSL tables: x P+TF "
+           "| OSL computed: x P+TF | bake (ms) | tables (kB) |", "|---|---|---|---|---|---|---|---|"]
     for name, by in rows.items():
-        t, n, o = by.get("tables"), by.get("nodes"), by.get("osl")
+        t, n, ot, o = by.get("tables"), by.get("nodes"), by.get("osl-tables"), by.get("osl")
         baked = t is not None and t.get("bake_ms") is not None
         cells = [name, preset(name).accuracy]
         for r in (t, n):
             cells.append("" if r is None else f"{r['nodes']:,}, {r['vs_reference']:.2f}")
         if t is not None and not baked:
             cells[2] = f"computes ({cells[2]})"
-        cells.append("" if o is None else f"{o['vs_reference']:.2f}")
+        for r in (ot, o):
+            cells.append("" if r is None else f"{r['vs_reference']:.2f}")
         cells.append(f"{t['bake_ms']:.1f}" if baked else "")
         cells.append(f"{t['table_bytes'] / 1024:.0f}" if baked else "")
         out.append("| " + " | ".join(cells) + " |")

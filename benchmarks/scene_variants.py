@@ -21,7 +21,7 @@ class Variant:
     """One material to measure: a stock BSDF or the layered material of a preset."""
 
     label: str
-    backend: str = "stock"  # "stock" (a Blender BSDF), "nodes" (the node group) or "osl"
+    backend: str = "stock"  # "stock" (a Blender BSDF), or bench_scene.BACKENDS
     preset: str | None = None
     accuracy: str | None = None
     material: object = field(default=None, repr=False)
@@ -29,14 +29,16 @@ class Variant:
     nodes: int | None = None  # nodes the layered node group interprets
     bake_ms: float | None = None  # a bake of the material's tables (tables variants)
     table_bytes: int | None = None  # the tables' texels in memory
+    rebuild_ms: float | None = None  # OSL reading tables: a bake, the text written and compiled
 
     @property
     def osl(self) -> bool:
-        return self.backend == "osl"
+        return self.backend.startswith("osl")
 
     def record(self) -> dict:
         return dict(label=self.label, backend=self.backend, preset=self.preset, accuracy=self.accuracy,
-                    nodes=self.nodes, optics=self.optics, bake_ms=self.bake_ms, table_bytes=self.table_bytes)
+                    nodes=self.nodes, optics=self.optics, bake_ms=self.bake_ms, table_bytes=self.table_bytes,
+                    rebuild_ms=self.rebuild_ms)
 
 
 def stock_variants() -> list[Variant]:
@@ -96,19 +98,39 @@ def layered_variant(obj, preset_name: str, backend: str, accuracy: str, optics: 
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.model import preset
 
-    evaluation = "tables" if backend == "tables" else "arithmetic"
+    evaluation = "tables" if backend in ("tables", "osl-tables") else "arithmetic"
     params = preset(preset_name).replace(accuracy=accuracy, evaluation=evaluation,
                                          **({"optics": optics} if optics else {}))
     label = f"{preset_name} {accuracy} {params.optics} {backend}"
     obj.material_slots[0].material = None  # so that the add-on makes a new material
-    mat = apply_layered_material(obj, params, "osl" if backend == "osl" else "nodes", name=label)
+    shader = "osl" if backend.startswith("osl") else "nodes"
+    mat = apply_layered_material(obj, params, shader, name=label)
     mat.use_fake_user = True
     v = Variant(label, backend, preset_name, accuracy, mat, optics=params.optics)
-    if backend != "osl":
+    if shader == "nodes":
         v.nodes = interpreted_nodes(mat.node_tree)
-    if backend == "tables":
+    if evaluation == "tables":
         v.bake_ms, v.table_bytes = bake_cost(params)
+    if backend == "osl-tables" and v.bake_ms is not None:
+        v.rebuild_ms = osl_rebuild_cost(mat, params)
     return v
+
+
+def osl_rebuild_cost(mat, params) -> float:
+    """Median wall time (ms) of what a change of a value costs the OSL shader reading tables: a bake, its
+    text written and compiled (each time for values not seen before, so nothing is reused)."""
+    import numpy as np
+
+    from layered_brdf_addon.blender.material import apply_layered_material
+
+    times = []
+    for k in range(1, BAKE_REPS + 1):
+        changed = params.replace(e0=params.e0 * (1.0 + 1e-3 * k))
+        t = time.perf_counter()
+        apply_layered_material(mat, changed, "osl")
+        times.append(time.perf_counter() - t)
+    apply_layered_material(mat, params, "osl")
+    return 1e3 * float(np.median(times))
 
 
 def bake_cost(params) -> tuple[float | None, int | None]:

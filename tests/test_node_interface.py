@@ -15,7 +15,7 @@ from layered_brdf_addon.model.policy import plan_effects
 @pytest.fixture
 def group():
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    return node_group_builder.ensure_group(plan_effects(preset("oil_slick"), backend="osl"))
+    return node_group_builder.ensure_group(plan_effects(preset("oil_slick").replace(evaluation="arithmetic")))
 
 
 def test_every_input_socket_is_named_for_people_with_a_subtype_range_and_tooltip(group):

@@ -86,6 +86,6 @@ def members(protocol: type) -> list[str]:
 
 class TableOps(SurfaceOps, Protocol):
     """A shading point that reads a material's baked tables (:mod:`.shading.tables`): the node group
-    and numpy; the OSL shader always computes its closures."""
+    (Image Texture nodes), the OSL shader (its own constant array) and numpy."""
 
     def table(self, k: int, xy: Value) -> tuple[Value, Value]: ...  # image k's colour and alpha at xy

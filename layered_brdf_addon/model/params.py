@@ -294,12 +294,13 @@ class LayeredParams:
                       "modes allow stays on the node, so that any socket can be edited without the add-on, at a "
                       "cost per sample)", options=EFFECTS_MODES, group="Accuracy")
     evaluation: str = _p("tables", "Evaluation",
-                         "How the node group finds its closures: 'tables' (read from small images baked for the "
+                         "How the shader finds its closures: 'tables' (read from small images baked for the "
                          "material's values, over the view's angle and the thickness: the cost of Blender's own "
                          "BSDFs; used where every value is a constant, the boundaries are parallel and the "
                          "thickness is the pattern's, and rebaked by the add-on when a value changes) or "
                          "'arithmetic' (computed at every shading point: any socket may be keyframed, driven or "
-                         "linked). The OSL shader always computes", options=EVALUATION_MODES, group="Accuracy")
+                         "linked). The OSL shader holds its tables in its own text", options=EVALUATION_MODES,
+                         group="Accuracy")
     lobe: str = _p("beckmann", "Lobe",
                    "Closure used for the specular lobes: 'beckmann' (both backends) or 'phong' (OSL only)",
                    options=LOBES, group="Accuracy")
