@@ -4,9 +4,10 @@ Scene: Suzanne with a level-2 Subdivision Surface, smooth shaded, at 256 x 256, 
 one of Blender's bundled studio HDRIs and a sun; Cycles on the CPU with its default
 bounces, a fixed seed, no denoising, no adaptive sampling, one render thread.
 
-Cycles: for every variant (Principled BSDF + Thin Film, Principled, Glossy, Diffuse, and
-the layered material for each preset x backend, RGB, plus every accuracy mode for one
-preset) the cost per sample is (t_hi - t_lo) / (n_hi - n_lo), t the process CPU time of
+Cycles: for every variant (Principled BSDF + Thin Film, Principled, Glossy, Diffuse, the
+closures alone (and, when OSL is measured, the same closures as an OSL shader and Principled
+BSDF + Thin Film under Cycles' OSL shading system: OSL's own floor), and the layered material
+for each preset x backend, RGB, plus every accuracy mode for one preset) the cost per sample is (t_hi - t_lo) / (n_hi - n_lo), t the process CPU time of
 a render at n samples.  Each variant gets a warm-up render first (kernels, shader
 compilation); repetitions are interleaved (rep 1: every variant, rep 2: every variant,
 ...), so slow drifts of a shared machine spread over all variants.  Ratios are of
@@ -22,7 +23,8 @@ on, nested groups expanded (group input/output, reroute and frame nodes excluded
 
 Tables: for each variant reading baked tables, the time of a bake (the shading program on
 numpy over the tables' texels, median of several) and the tables' size in memory; for the OSL
-shader reading them, also the time to write and compile its text (what a change of a value costs).
+shader reading them, also what a change of a value costs it ("change": a bake, its text written
+and compiled).
 
 Writes benchmarks/results/scene_cost.json (every raw measurement) and prints a table.
 """
@@ -261,7 +263,8 @@ def table(d: dict) -> str:
              f"{s['reps']} interleaved repetitions; Blender {d['machine']['bpy']}, "
              f"{d['machine']['cpu_count']} CPUs; run took {d['seconds'] / 60:.0f} min.", "",
              "| material | backend | accuracy | optics | nodes interpreted | ms / sample min / median / max "
-             "| x Principled + Thin Film | bake (ms) | tables (kB) |", "|---|---|---|---|---|---|---|---|---|"]
+             "| x Principled + Thin Film | bake (ms) | tables (kB) | change (ms) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in d["cycles"]:
         p = r["per_sample"]
         flag = "" if r["magenta"] < MAGENTA_FAILED else " (magenta)"
@@ -269,7 +272,8 @@ def table(d: dict) -> str:
                      f"{r.get('optics') or ''} | {r['nodes'] if r['nodes'] is not None else ''} | "
                      f"{1e3 * p['min']:.0f} / {1e3 * p['median']:.0f} / {1e3 * p['max']:.0f} | "
                      f"{r['vs_reference']:.2f} | {_cell(r.get('bake_ms'), '{:.1f}')} | "
-                     f"{_cell(r.get('table_bytes') and r['table_bytes'] / 1024, '{:.0f}')} |")
+                     f"{_cell(r.get('table_bytes') and r['table_bytes'] / 1024, '{:.0f}')} | "
+                     f"{_cell(r.get('rebuild_ms'), '{:.0f}')} |")
     e = d.get("eevee", {})
     lines.append("")
     if e.get("skipped"):
@@ -336,7 +340,9 @@ def main(argv=None):
     args = parse_args(argv)
     t0 = time.perf_counter()
     obj = build_scene()
-    variants = (stock_variants() + floor_variants()
+    stock = stock_variants()
+    osl_measured = any(b.startswith("osl") for b in args.backends)
+    variants = (stock + floor_variants(stock[0] if osl_measured else None)
                 + layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET, args.spectral_modes,
                                    args.paper_optics))
     d = dict(machine=machine_info(), seconds=0.0,

@@ -5,7 +5,11 @@ EEVEE too.  For each preset: the look-dev scene (layered_brdf_addon/blender/look
 rendered by Cycles and by EEVEE (tests/eevee_lookdev.py, in a subprocess: EEVEE needs
 EGL), both encoded by Blender with AgX; the mean and 95th percentile CIEDE2000 over the
 ball's pixels; and, for scale, the same numbers between two Cycles renders that differ
-only in their seed (Cycles' own noise at these samples).
+only in their seed (Cycles' own noise at these samples).  The presets read their baked
+tables where they can (the default Evaluation); each is also rendered computing its closures
+(Evaluation 'arithmetic'): the CIEDE2000 between the two per engine (EEVEE reads the tables'
+Image Textures with mipmaps and filtering, Cycles point by point), and that of EEVEE computing
+against Cycles.
 
 Writes docs/images/eevee-vs-cycles.png and a .json next to it (numbers and timings).
 A few minutes on two cores: ``.venv-5.2/bin/python benchmarks/eevee_vs_cycles.py``.
@@ -58,6 +62,8 @@ def main(argv=None) -> int:
                               3600)
         # Cycles' own noise: the same renders with another seed
         noise = eevee_lookdev.run(Path(tmp) / "n.npz", args.size, args.cycles_samples, 0, args.presets, 3600, seed=1)
+        computed = eevee_lookdev.run(Path(tmp) / "a.npz", args.size, args.cycles_samples, args.eevee_samples,
+                                     args.presets, 3600, evaluation="arithmetic")
     rows, tiles, labels = [], [], []
     for name in args.presets:
         c, e, m = r[f"{name}/cycles"], r[f"{name}/eevee"], r[f"{name}/mask"]
@@ -68,6 +74,12 @@ def main(argv=None) -> int:
                      "pixels": int(m.sum()), "cycles_seconds": float(r[f"{name}/cycles_seconds"]),
                      "eevee_seconds": float(r[f"{name}/eevee_seconds"]),
                      "eevee_failed_pixels": int(r[f"{name}/eevee_failed"][m].sum())})
+        for engine in ("cycles", "eevee"):  # tables against computed closures, in the same engine
+            dt = eevee_lookdev.delta_e2000(r[f"{name}/{engine}"], computed[f"{name}/{engine}"], m)
+            rows[-1][f"{engine}_tables_vs_computed_mean"] = float(dt.mean())
+            rows[-1][f"{engine}_tables_vs_computed_p95"] = float(np.percentile(dt, 95))
+        dc = eevee_lookdev.delta_e2000(c, computed[f"{name}/eevee"], m)  # EEVEE computing, against Cycles
+        rows[-1]["computed_mean"], rows[-1]["computed_p95"] = float(dc.mean()), float(np.percentile(dc, 95))
         tiles += [c, e]
         labels += [[preset_label(name), f"Cycles {args.cycles_samples} spp",
                     f"{rows[-1]['cycles_seconds']:.1f} s"],
@@ -89,10 +101,13 @@ def main(argv=None) -> int:
         save_png(staged.temp(output), pixels)
         write_json(staged.temp(sidecar), data)
     print(f"{'preset':18s} {'mean':>6s} {'p95':>6s} {'noise mean':>10s} {'noise p95':>9s} {'Cycles s':>9s} "
-          f"{'EEVEE s':>8s}")
+          f"{'EEVEE s':>8s}  EEVEE computing: mean / p95; tables vs computed, mean / p95: Cycles, EEVEE")
     for row in rows:
         print(f"{row['name']:18s} {row['mean']:6.2f} {row['p95']:6.2f} {row['cycles_noise_mean']:10.2f} "
-              f"{row['cycles_noise_p95']:9.2f} {row['cycles_seconds']:9.1f} {row['eevee_seconds']:8.1f}")
+              f"{row['cycles_noise_p95']:9.2f} {row['cycles_seconds']:9.1f} {row['eevee_seconds']:8.1f}  "
+              f"{row['computed_mean']:.2f} / {row['computed_p95']:.2f}; "
+              f"{row['cycles_tables_vs_computed_mean']:.2f} / {row['cycles_tables_vs_computed_p95']:.2f}, "
+              f"{row['eevee_tables_vs_computed_mean']:.2f} / {row['eevee_tables_vs_computed_p95']:.2f}")
     print(f"wrote {output}, {sidecar}; {data['seconds']:.0f} s")
     return 0
 

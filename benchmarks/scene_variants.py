@@ -21,7 +21,7 @@ class Variant:
     """One material to measure: a stock BSDF or the layered material of a preset."""
 
     label: str
-    backend: str = "stock"  # "stock" (a Blender BSDF), or bench_scene.BACKENDS
+    backend: str = "stock"  # "stock" (Blender's BSDFs), "osl-stock" (under Cycles' OSL), or bench_scene.BACKENDS
     preset: str | None = None
     accuracy: str | None = None
     material: object = field(default=None, repr=False)
@@ -88,8 +88,50 @@ CLOSURE_FLOORS = (("closures alone: diffuse + 4 glossy (dispersion)", 4),
                   ("closures alone: diffuse + 2 glossy (equal indices)", 2))
 
 
-def floor_variants() -> list[Variant]:
-    return [kept_variant(label, closure_floor_material(label, glossy)) for label, glossy in CLOSURE_FLOORS]
+OSL_FLOOR = """\
+#include "stdcycles.h"
+shader closures_alone(output closure color BSDF = 0)
+{{
+  vector T = normalize(cross(N, I));
+  BSDF = color(0.2, 0.3, 0.1) * diffuse(N);
+{lobes}}}
+"""
+
+
+def osl_closure_floor_material(label: str, glossy: int):
+    """What the OSL shading system spends on the closures alone: an OSL shader adding a diffuse closure
+    and ``glossy`` anisotropic Beckmann closures of constant weights (the OSL shader's own closures)."""
+    import bpy
+
+    from layered_brdf_addon.blender.osl import compile_script_node
+
+    lobes = "".join(f"  BSDF += color({0.3 + 0.2 * (k % 3):.1f}, 0.5, {0.8 - 0.2 * (k % 3):.1f}) * "
+                    f"microfacet(\"beckmann\", N, T, {(0.15 + 0.05 * k) ** 2 * 1.5:.4f}, "
+                    f"{(0.15 + 0.05 * k) ** 2 / 1.5:.4f}, 0.0, 0);\n" for k in range(glossy))
+    mat = bpy.data.materials.new(label)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    text = bpy.data.texts.new(f"{label}.osl")
+    text.from_string(OSL_FLOOR.format(lobes=lobes))
+    script = nt.nodes.new("ShaderNodeScript")
+    script.mode = "INTERNAL"
+    compile_script_node(script, text)
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(script.outputs["BSDF"], out.inputs["Surface"])
+    return mat
+
+
+def floor_variants(reference: Variant | None = None) -> list[Variant]:
+    """The closures alone, as stock nodes; with the ``reference`` variant (when OSL is measured), also as an
+    OSL shader, and the reference rendered by Cycles' OSL shading system: what OSL itself costs."""
+    vs = [kept_variant(label, closure_floor_material(label, glossy)) for label, glossy in CLOSURE_FLOORS]
+    if reference is not None:
+        for label, glossy in CLOSURE_FLOORS:
+            v = kept_variant(f"{label}, OSL", osl_closure_floor_material(f"{label}, OSL", glossy))
+            v.backend = "osl-stock"
+            vs.append(v)
+        vs.append(Variant(f"{reference.label}, OSL shading system", "osl-stock", material=reference.material))
+    return vs
 
 
 def layered_variant(obj, preset_name: str, backend: str, accuracy: str, optics: str | None = None) -> Variant:

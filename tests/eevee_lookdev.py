@@ -36,15 +36,16 @@ def delta_e2000(a8: np.ndarray, b8: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 
 def run(out: Path, size: int, cycles_samples: int, eevee_samples: int, presets, timeout: float = 600.0,
-        seed: int = 0) -> dict:
+        seed: int = 0, evaluation: str = "tables") -> dict:
     """Run this script in a subprocess; its results as a dict (raises with Blender's stderr
-    when EEVEE could not render)."""
+    when EEVEE could not render).  ``evaluation``: the presets' Evaluation (baked tables or
+    arithmetic)."""
     import os
     import subprocess
 
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     proc = subprocess.run([sys.executable, str(Path(__file__).resolve()), str(out), str(size), str(cycles_samples),
-                           str(eevee_samples), *presets, "--seed", str(seed)], cwd=ROOT, env=env, capture_output=True, text=True,
+                           str(eevee_samples), *presets, "--seed", str(seed), "--evaluation", evaluation], cwd=ROOT, env=env, capture_output=True, text=True,
                           timeout=timeout)
     if proc.returncode != 0 or not Path(out).exists():
         raise RuntimeError("EEVEE could not render (it needs EGL and Mesa's software GL: see .ci/run):\n"
@@ -92,6 +93,7 @@ def main(argv) -> None:
     ap.add_argument("eevee_samples", type=int)
     ap.add_argument("presets", nargs="+")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--evaluation", default="tables")
     a = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     import bpy  # noqa: F401  (first: it makes mathutils importable)
@@ -110,7 +112,7 @@ def main(argv) -> None:
     with tempfile.TemporaryDirectory(prefix="eevee_lookdev_") as tmp:
         for name in a.presets:
             ball.material_slots[0].material = None
-            apply_layered_material(ball, preset(name), "nodes", name=name)
+            apply_layered_material(ball, preset(name).replace(evaluation=a.evaluation), "nodes", name=name)
             scene.render.engine = "CYCLES"
             exr = Path(tmp) / f"{name}_cycles.exr"
             result[f"{name}/cycles_seconds"] = np.float64(render_to_exr(exr, scene))

@@ -68,6 +68,10 @@ def test_tables_only_for_constant_values():
     p = preset("oil_slick")
     assert plan_effects(p).tables and plan_effects(p).key.endswith("Tb")
     assert not plan_effects(p, {"e0"}).tables
+    # The pattern's values are not in the tables: a flowing noise keeps them.
+    assert plan_effects(p, {"noise_phase", "noise_scale"}) == plan_effects(p)
+    assert not plan_effects(p.replace(normal_mode="tilted", tilt=10.0), {"noise_phase"}).tables
+    assert plan_effects(p, {"tilt"}).tables and not plan_effects(p.replace(normal_mode="tilted"), {"tilt"}).tables
     assert not plan_effects(p, {THICKNESS_LINKED}).tables
     assert plan_effects(p, backend="osl") == plan_effects(p)
     assert not plan_effects(p.replace(lobe="phong"), backend="osl").tables

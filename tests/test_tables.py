@@ -96,13 +96,18 @@ def test_tables_stay_small_and_finite_for_hard_values():
         assert texels.nbytes <= MAX_TABLE_BYTES == 1 << 20, (texels.nbytes, layout)
 
 
-def test_the_digest_follows_every_value_and_the_plan():
+def test_the_digest_follows_every_value_the_tables_hold_and_the_plan():
     p = preset("oil_slick")
     plan = plan_effects(p)
     assert table_digest(p, plan) == table_digest(preset("oil_slick"), plan)
     assert table_digest(p.replace(ks=p.ks * 0.5), plan) != table_digest(p, plan)
-    assert table_digest(p.replace(noise_phase=p.noise_phase + 1.0), plan) != table_digest(p, plan)
+    assert table_digest(p.replace(d_max=p.d_max + 1.0), plan) != table_digest(p, plan)
     assert table_digest(p, replace(plan, analytic=False)) != table_digest(p, plan)
+    # The pattern's values decide where d falls, not what the tables hold at d: no bake when they change.
+    moved = p.replace(noise_phase=p.noise_phase + 1.0, noise_scale=p.noise_scale * 2.0, noise_detail=1.0,
+                      noise_roughness=0.2, bump_strength=3.0, tilt_azimuth=40.0)
+    assert table_digest(moved, plan) == table_digest(p, plan)
+    assert np.array_equal(bake(moved, plan)[1], bake(p, plan)[1])
 
 
 def test_a_tilted_boundary_is_not_tabulated():

@@ -91,6 +91,28 @@ def test_a_value_typed_on_the_node_is_rebaked_when_the_material_syncs():
     assert params_of(mat).ks == pytest.approx(0.25) and _current(mat)
 
 
+def test_a_flowing_noise_keeps_the_tables_and_bakes_nothing():
+    """A keyframed noise phase (a film that flows) is not in the tables: the material keeps reading them, and
+    a frame change, a sync or a new noise scale bakes nothing."""
+    mat = _apply(add_sphere(), OIL)
+    node = shader_node(mat)
+    sock = node.inputs[group_socket_name(LayeredParams.spec("noise_phase"))]
+    for frame, phase in ((1, 0.0), (20, 3.0)):
+        sock.default_value = phase
+        sock.keyframe_insert("default_value", frame=frame)
+    bpy.context.view_layer.update()
+    sync.sync_material(mat)
+    group = shader_node(mat).node_tree
+    assert group[node_group_builder.PLAN_KEY].endswith("Tb") and _current(mat)
+    images = _images(group)
+    crcs = [i[tables.CHECKSUM_KEY] for i in images]
+    bpy.context.scene.frame_set(10)
+    node.inputs[group_socket_name(LayeredParams.spec("noise_scale"))].default_value = OIL.noise_scale * 3.0
+    assert not sync.sync_material(mat)  # nothing to rebuild or bake
+    assert shader_node(mat).node_tree == group and _images(group) == images
+    assert [i[tables.CHECKSUM_KEY] for i in images] == crcs and _current(mat)
+
+
 def test_a_copied_material_gets_tables_of_its_own_when_it_changes():
     original = _apply(add_sphere(), OIL)
     copy = original.copy()

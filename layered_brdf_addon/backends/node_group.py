@@ -223,9 +223,10 @@ class GroupOps(NodeOps):
         return self.out(node, dd, "Normal", "vector")
 
     def table(self, k, xy):
-        """Image ``k`` of the material's baked tables at ``xy`` (an Image Texture, linear, extended at the
-        edges; the image is the material's, assigned by the Blender layer): its colour and alpha."""
-        node, dd = self.node("ShaderNodeTexImage", {"Vector": xy}, interpolation="Linear", extension="EXTEND",
+        """Image ``k`` of the material's baked tables at ``xy`` (an Image Texture, Cubic over the tables' spline
+        coefficients, extended at the edges; the image is the material's, assigned by the Blender layer): its
+        colour and alpha."""
+        node, dd = self.node("ShaderNodeTexImage", {"Vector": xy}, interpolation="Cubic", extension="EXTEND",
                              label=f"Baked table {k}")
         node[TABLE_SLOT_KEY] = k
         return self.out(node, dd, "Color", "vector"), self.out(node, dd, "Alpha", "float")

@@ -347,8 +347,8 @@ def running_sums(texels: np.ndarray) -> np.ndarray:
 def _array_text(values: np.ndarray) -> str:
     """``values`` as an OSL initialiser list, eight significant digits (within a float's last bit or two),
     16 to a line."""
-    words = np.char.mod("%.8g", values.ravel().astype(np.float64))
-    rows = [", ".join(words[i:i + 16]) for i in range(0, words.size, 16)]
+    words = list(map("{:.8g}".format, values.ravel().astype(np.float64).tolist()))
+    rows = [", ".join(words[i:i + 16]) for i in range(0, len(words), 16)]
     return "\n      " + ",\n      ".join(rows) + "\n  "
 
 

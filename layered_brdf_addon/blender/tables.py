@@ -21,7 +21,7 @@ from ..backends import node_group as node_group_builder
 from ..model import ops_numpy, table_bake
 from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
-from ..model.table_bake import bake, table_digest, table_layout
+from ..model.table_bake import bake, spline_coefficients, table_digest, table_layout
 
 DIGEST_KEY = "layered_brdf_tables"  # on a group built for tables and on its images: the values they were baked for
 IMAGE_SLOT_KEY = "layered_brdf_table_slot"  # on an image: which image of the tables it is
@@ -101,6 +101,7 @@ def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
     """Bake ``params``'s tables into ``group``'s images (made where missing or of another size, or used
     elsewhere), pack them and stamp images and group."""
     layout, texels = bake(params, plan)
+    texels = spline_coefficients(texels)  # what Cubic interpolation reads back as the baked values
     digest = wanted_digest(params, plan)
     nodes = node_group_builder.table_nodes(group)
     for k in range(layout.images):

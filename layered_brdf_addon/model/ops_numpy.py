@@ -281,25 +281,38 @@ class ShadingPoint:
         return normalize(n + g * distance, n)
 
 
+def _bspline_weights(t):
+    """The four cubic B-spline weights of offset ``t`` (0..1) from the texel before, as Cycles and EEVEE
+    weigh texels ``i - 1 .. i + 2`` for Cubic interpolation."""
+    t2, t3 = t * t, t * t * t
+    return ((-t3 + 3.0 * t2 - 3.0 * t + 1.0) / 6.0, (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0,
+            (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0, t3 / 6.0)
+
+
 def table_lookup(tables: np.ndarray, k: int, x, y):
-    """Image ``k`` of ``tables`` at image coordinates ``x``, ``y`` (0..1), as Cycles' Image Texture reads
-    it with linear interpolation and extended edges: texel centres at ``(i + 0.5) / W``."""
+    """Image ``k`` of ``tables`` at image coordinates ``x``, ``y`` (0..1), as Cycles' Image Texture (and
+    EEVEE's) reads it with Cubic interpolation and extended edges: a cubic B-spline over the texels,
+    texel centres at ``(i + 0.5) / W``, indices clamped to the image.  The tables hold the spline's
+    coefficients (:func:`..table_bake.spline_coefficients`), so the lookup returns the baked values at
+    texel centres."""
     _, h, w, _ = tables.shape
     img = tables[k].astype(float)
 
     def axis(u, n):
         p = np.asarray(u, dtype=float) * n - 0.5
         i0 = np.floor(p)
-        f = p - i0
+        weights = _bspline_weights(p - i0)
         i0 = i0.astype(int)
-        return np.clip(i0, 0, n - 1), np.clip(i0 + 1, 0, n - 1), f
+        return [(np.clip(i0 + o, 0, n - 1), wt) for o, wt in zip((-1, 0, 1, 2), weights)]
 
-    x0, x1, fx = axis(x, w)
-    y0, y1, fy = axis(y, h)
-    fx, fy = fx[..., None], fy[..., None]
-    top = img[y0, x0] * (1.0 - fx) + img[y0, x1] * fx
-    bottom = img[y1, x0] * (1.0 - fx) + img[y1, x1] * fx
-    return top * (1.0 - fy) + bottom * fy
+    xs, ys = axis(x, w), axis(y, h)
+    out = 0.0
+    for yi, wy in ys:
+        row = 0.0
+        for xi, wx in xs:
+            row = row + img[yi, xi] * np.asarray(wx)[..., None]
+        out = out + row * np.asarray(wy)[..., None]
+    return out
 
 
 def named(hint, x):

@@ -16,7 +16,7 @@ from typing import Iterable
 from .params import LayeredParams, ParameterError, iter_sockets
 from .plan import EffectPlan
 from .shading.base_shader import CLEAR_K
-from .shading.tables import tabulable
+from .shading.tables import UNREAD_BY_TABLES, tabulable
 
 #: The shader backends: a node group of stock nodes, or an OSL shader (Cycles CPU / OptiX).
 BACKENDS = ("nodes", "osl")
@@ -75,14 +75,17 @@ def supports(backend: str, lobe: str) -> bool:
 def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = "nodes") -> EffectPlan:
     """The effects the shader must contain for ``p`` on every frame, and whether the shader (the node
     group or the OSL shader) reads its closures from baked tables: where ``p.evaluation`` is "tables",
-    nothing is animated, the effects are planned and the plan's closures can be tabulated
-    (:func:`~.shading.tables.tabulable`).
+    nothing the tables hold is animated (:data:`~.shading.tables.UNREAD_BY_TABLES` may be), the effects
+    are planned and the plan's closures can be tabulated (:func:`~.shading.tables.tabulable`).
 
     ``animated``: names of parameters that may change between frames (keyframes, drivers,
     linked sockets), and :data:`THICKNESS_LINKED` where the Thickness input is linked.  See docs/effect-planning.md.
     """
     animated = frozenset(animated)
-    tables = backend in BACKENDS and p.evaluation == "tables" and p.effects == "planned" and not animated
+    # Values the tables never hold may move (UNREAD_BY_TABLES: a flowing noise pattern); a tilt that moves
+    # makes a tilted boundary's plan tilted, which is not tabulable.
+    tables = backend in BACKENDS and p.evaluation == "tables" and p.effects == "planned" and \
+        not (animated - UNREAD_BY_TABLES)
     if p.effects == "all":  # every effect stays, as if every socket could take any value
         animated |= {spec.name for spec in iter_sockets()}
 

@@ -21,7 +21,8 @@ from .plan import EffectPlan
 from .program import shade, tabulated_shade
 from .shading.base_shader import passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
-from .shading.tables import COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, NotTabulable, TableLayout, tabulable
+from .shading.tables import (COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, UNREAD_BY_TABLES, NotTabulable,
+                             TableLayout, tabulable)
 from .shading.thin_film import harmonic_count
 
 SAMPLES_PER_FRINGE = 24  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
@@ -133,21 +134,55 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
     return layout, out
 
 
+def _prefilter(values: np.ndarray, axis: int) -> np.ndarray:
+    """Cubic B-spline coefficients along ``axis`` whose spline passes through ``values`` at the texel
+    centres, with the edges extended (clamped indices): ``(c[i-1] + 4 c[i] + c[i+1]) / 6 = values[i]``,
+    ``c[-1] = c[0]`` and ``c[n] = c[n-1]``; a tridiagonal system, solved by elimination (Thomas)."""
+    a = np.moveaxis(np.asarray(values, dtype=np.float64), axis, 0).copy()
+    n = a.shape[0]
+    if n == 1:
+        return np.moveaxis(a, 0, axis)
+    diag = np.full(n, 4.0 / 6.0)
+    diag[0] = diag[-1] = 5.0 / 6.0
+    off = 1.0 / 6.0
+    d = diag.copy()
+    for i in range(1, n):  # forward elimination
+        m = off / d[i - 1]
+        d[i] -= m * off
+        a[i] -= m * a[i - 1]
+    a[-1] /= d[-1]
+    for i in range(n - 2, -1, -1):  # back substitution
+        a[i] = (a[i] - off * a[i + 1]) / d[i]
+    return np.moveaxis(a, 0, axis)
+
+
+def spline_coefficients(texels: np.ndarray) -> np.ndarray:
+    """What the node group's images hold: for each image (images, H, W, RGBA), the cubic B-spline
+    coefficients that Cubic interpolation (Cycles' and EEVEE's Image Texture) turns back into the baked
+    values at the texel centres, smooth in between (float32).  Cubic rather than Linear interpolation:
+    EEVEE reads Linear images through mipmaps chosen from screen-space derivatives, which a thickness
+    noise makes erratic (a dotted pattern), and Cubic reads level 0 only."""
+    return _prefilter(_prefilter(texels, 1), 2).astype(np.float32)
+
+
 def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
     """What the tables of ``params`` for ``plan`` depend on, as a short digest: the table format, the
-    plan, and every value the shader reads."""
+    plan, and every value the tables hold (not the pattern's, :data:`.shading.tables.UNREAD_BY_TABLES`)."""
+    values = {k: v for k, v in held_values(params, "nodes", plan).items() if k not in UNREAD_BY_TABLES}
     record = json.dumps({"format": TABLE_FORMAT, "plan": plan.key, "samples": [COS_SAMPLES, SAMPLES_PER_FRINGE],
-                         "values": held_values(params, "nodes", plan)}, sort_keys=True)
+                         "values": values}, sort_keys=True)
     return hashlib.sha1(record.encode()).hexdigest()[:16]
 
 
 
 def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayout, texels: np.ndarray, n0, v, d):
     """What the group reading these tables returns at points of upper normal ``n0``, view ``v`` and
-    thickness ``d`` (numpy arrays): the program's tabulated step on numpy, reading ``texels`` as
-    Cycles' Image Texture does (:func:`.ops_numpy.table_lookup`)."""
+    thickness ``d`` (numpy arrays): the program's tabulated step on numpy, reading ``texels`` (a bake's)
+    as Cycles' Image Texture reads the images the group holds (:func:`spline_coefficients`,
+    :func:`.ops_numpy.table_lookup`)."""
     n0 = np.asarray(n0, dtype=float)
-    pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0), tables=texels)
+    pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0),
+                      tables=spline_coefficients(texels))
     P = clamped_inputs(pt, plan)
     return tabulated_shade(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), pt.incoming(),
                            np.asarray(d, dtype=float))

@@ -6,7 +6,8 @@ anisotropy depend on the material's values (constants) and on two per-point scal
 view's cosine to ``n0`` and the thickness ``d``.  A material whose values are constants can
 therefore have them baked (:mod:`..table_bake`, by this same program run on numpy) into small
 float images over ``(cos_v, d)``, which the shader reads with one Image Texture node each
-(linear interpolation, extended at the edges), whatever the accuracy mode or optics.
+(cubic B-spline interpolation of prefiltered coefficients, extended at the edges), whatever the
+accuracy mode or optics.
 
 The images (:class:`TableLayout`): one per glossy closure (colour: its weight per channel;
 alpha: the Glossy BSDF's Roughness, ``sqrt(alpha)``), one for the diffuse colour and the Base
@@ -22,9 +23,18 @@ from ..plan import EffectPlan
 from .base_shader import base_receives_light
 from .closures import Closure, ShadingResult
 
-TABLE_FORMAT = 1  # what a texel holds (this module's layout); baked tables of another format are rebaked
+TABLE_FORMAT = 2  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
+# images); baked tables of another format are rebaked
 COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured: docs/tables.md)
 PARALLEL_TOLERANCE = 1.0e-5  # a baked closure's normal may differ from n0 by this (rounding)
+
+
+#: Values a tabulable plan reads before or besides its tables, never in them: the pattern's (they decide
+#: where the thickness falls within [d_min, d_max], the tables' axis) and the lower boundary's direction
+#: (parallel to the upper one).  Animating them (a noise phase that makes a film flow) keeps the tables,
+#: and changing them bakes nothing.
+UNREAD_BY_TABLES = frozenset({"noise_scale", "noise_detail", "noise_roughness", "noise_phase", "tilt",
+                              "tilt_azimuth", "bump_strength"})
 
 
 class NotTabulable(ValueError):
