@@ -84,7 +84,7 @@ def tables_current(group, params: LayeredParams, plan: EffectPlan, check_pixels:
         readers = nodes.get(k, [])
         image = readers[0].image if readers else None
         if any(n.image != image for n in readers) or \
-                not image_intact(image, digest, k, (layout.image_height, layout.width)):
+                not image_intact(image, digest, k, (layout.height, layout.image_width)):
             return False
         if check_pixels and not pixels_intact(image):
             return False
@@ -111,8 +111,8 @@ def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
         image = readers[0].image
         if image is None or image.library is not None or image.users > len(readers) or DIGEST_KEY not in image or \
                 any(n.image != image for n in readers) or \
-                tuple(image.size) != (layout.width, layout.image_height) or not image.is_float:
-            image = _new_image(f"{IMAGE_PREFIX} {digest[-8:]} {k}", layout.width, layout.image_height)
+                tuple(image.size) != (layout.image_width, layout.height) or not image.is_float:
+            image = _new_image(f"{IMAGE_PREFIX} {digest[-8:]} {k}", layout.image_width, layout.height)
             for node in readers:
                 node.image = image
         else:

@@ -22,7 +22,7 @@ from .program import shade, tabulated_shade
 from .shading.base_shader import passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
 from .shading.surface_prelude import DEG, rotate_about
-from .shading.tables import (AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, NotTabulable,
+from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, NotTabulable,
                              TableLayout, tabulable, unread_by_tables)
 from .shading.thin_film import harmonic_count
 
@@ -45,15 +45,15 @@ def _fringe_samples(params: LayeredParams, plan: EffectPlan) -> int:
 
 def _most_rows(images: int, azimuths: int) -> int:
     """The most texels along the thickness that keep ``images`` images within :data:`MAX_TABLE_BYTES`."""
-    if azimuths > 1:  # each slice repeats a row at either edge
-        return MAX_TABLE_BYTES // (images * COS_SAMPLES * 16 * azimuths) - 2
+    if azimuths > 1:  # each slice repeats a column at either edge
+        return min(MAX_TABLE_BYTES // (images * azimuths * (ANGLE_SAMPLES + 2) * 16), MAX_THICKNESS_SAMPLES)
     return min(MAX_TABLE_BYTES // (images * COS_SAMPLES * 16), MAX_THICKNESS_SAMPLES)
 
 
 def thickness_samples(params: LayeredParams, plan: EffectPlan, images: int = 1, azimuths: int = 1) -> int:
     """Texels along the thickness: 1 for a constant one, else what its interference needs
     (:func:`_fringe_samples`), at most what keeps ``images`` images of :data:`COS_SAMPLES` texels a row
-    (and ``azimuths`` slices) within :data:`MAX_TABLE_BYTES` (and :data:`MAX_THICKNESS_SAMPLES`)."""
+    (or ``azimuths`` slices of :data:`ANGLE_SAMPLES`) within :data:`MAX_TABLE_BYTES` (and :data:`MAX_THICKNESS_SAMPLES`)."""
     if plan.thickness == "constant":
         return 1
     return int(min(_fringe_samples(params, plan), _most_rows(images, azimuths)))
@@ -61,8 +61,10 @@ def thickness_samples(params: LayeredParams, plan: EffectPlan, images: int = 1, 
 
 def _grid(width: int, height: int, d_min, d_max, azimuths: int = 1):
     """View directions, thicknesses and lower normals' azimuths (from the view's plane) of the texels,
-    (A, H, W): n0 = +z, the view in the xz plane towards +x."""
-    c = np.linspace(0.0, 1.0, width) ** 2
+    (A, H, W): n0 = +z, the view in the xz plane towards +x, at ``sqrt(cos_v) = i / (W - 1)`` (with
+    azimuths, at the angle ``pi/2 (1 - i / (W - 1))``)."""
+    c = np.cos((1.0 - np.linspace(0.0, 1.0, width)) * (0.5 * math.pi)) if azimuths > 1 else \
+        np.linspace(0.0, 1.0, width) ** 2
     t = np.linspace(0.0, 1.0, height) if height > 1 else np.zeros(1)
     a = np.linspace(0.0, math.pi, azimuths) if azimuths > 1 else np.zeros(1)
     A, T, C = np.meshgrid(a, t, c, indexing="ij")
@@ -137,12 +139,13 @@ def table_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
         raise NotTabulable(f"plan {plan.key}: the closures depend on more than the view and the thickness")
     closures, oriented = _closures(replace(plan, tables=False))
     azimuths = AZIMUTH_SAMPLES if plan.normals == "tilted" else 1
-    images = TableLayout(closures, COS_SAMPLES, 1, azimuths, oriented).images
+    width = ANGLE_SAMPLES if azimuths > 1 else COS_SAMPLES
+    images = TableLayout(closures, width, 1, azimuths, oriented).images
     height = thickness_samples(params, plan, images, azimuths)
     if azimuths > 1 and plan.thickness != "constant" and _fringe_samples(params, plan) > height:
         raise NotTabulable(f"plan {plan.key}: a tilted boundary's tables for {_fringe_samples(params, plan)} "
                            f"thickness rows would exceed {MAX_TABLE_BYTES} bytes")
-    return TableLayout(closures, COS_SAMPLES, height, azimuths, oriented)
+    return TableLayout(closures, width, height, azimuths, oriented)
 
 
 def fits(params: LayeredParams, plan: EffectPlan) -> bool:
@@ -159,8 +162,8 @@ def _plane(x, shape) -> np.ndarray:
 
 
 def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarray]:
-    """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, image_height, W, 4),
-    a tilted boundary's azimuth slices one above the other, each with its edge rows repeated."""
+    """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, H, image_width, 4),
+    a tilted boundary's azimuth slices side by side, each with its edge columns repeated."""
     layout = table_layout(params, plan)
     res, base, n0 = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
     shape = (layout.azimuths, layout.height, layout.width)
@@ -184,11 +187,19 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
 
 
 def _stack_slices(texels: np.ndarray, layout: TableLayout) -> np.ndarray:
-    """(images, A, H, W, 4) as the images hold them: (images, A H, W, 4), or with slices, each slice's
-    rows with the first and last repeated, (images, A (H + 2), W, 4)."""
+    """(images, A, H, W, 4) as the images hold them: (images, H, W, 4), or with slices side by side, each
+    slice's columns with the first and last repeated, (images, H, A (W + 2), 4)."""
     if layout.sliced:
-        texels = np.concatenate([texels[:, :, :1], texels, texels[:, :, -1:]], axis=2)
-    return np.ascontiguousarray(texels.reshape(texels.shape[0], layout.image_height, layout.width, 4))
+        texels = np.concatenate([texels[..., :1, :], texels, texels[..., -1:, :]], axis=3)
+    n = texels.shape[0]
+    return np.ascontiguousarray(np.moveaxis(texels, 1, 2).reshape(n, layout.height, layout.image_width, 4))
+
+
+def _unstack_slices(texels: np.ndarray, layout: TableLayout) -> np.ndarray:
+    """The slices of images (images, H, A (W + 2), 4) without their repeated columns: (images, A, H, W, 4)."""
+    n = texels.shape[0]
+    blocks = texels.reshape(n, layout.height, layout.azimuths, layout.block_width, 4)[..., 1:-1, :]
+    return np.moveaxis(blocks, 2, 1)
 
 
 def _prefilter(values: np.ndarray, axis: int) -> np.ndarray:
@@ -219,13 +230,11 @@ def spline_coefficients(texels: np.ndarray, layout: TableLayout | None = None) -
     values at the texel centres, smooth in between (float32).  Cubic rather than Linear interpolation:
     EEVEE reads Linear images through mipmaps chosen from screen-space derivatives, which a thickness
     noise makes erratic (a dotted pattern), and Cubic reads level 0 only.  With a sliced ``layout``
-    (:class:`TableLayout`), each slice is a spline of its own, its repeated edge rows the coefficients at
+    (:class:`TableLayout`), each slice is a spline of its own, its repeated edge columns the coefficients at
     its edges (what a clamped index reads)."""
     if layout is None or not layout.sliced:
         return _prefilter(_prefilter(texels, 1), 2).astype(np.float32)
-    n = texels.shape[0]
-    blocks = texels.reshape(n, layout.azimuths, layout.block_height, layout.width, 4)[:, :, 1:-1]
-    coefficients = _prefilter(_prefilter(blocks, 2), 3)
+    coefficients = _prefilter(_prefilter(_unstack_slices(texels, layout), 2), 3)
     return _stack_slices(coefficients, layout).astype(np.float32)
 
 
@@ -234,7 +243,8 @@ def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
     plan, and every value the tables hold (not the pattern's, :func:`.shading.tables.unread_by_tables`)."""
     unread = unread_by_tables(plan.normals)
     values = {k: v for k, v in held_values(params, "nodes", plan).items() if k not in unread}
-    samples = [COS_SAMPLES, SAMPLES_PER_FRINGE] + ([AZIMUTH_SAMPLES] if plan.normals == "tilted" else [])
+    samples = [COS_SAMPLES, SAMPLES_PER_FRINGE] + \
+        ([AZIMUTH_SAMPLES, ANGLE_SAMPLES] if plan.normals == "tilted" else [])
     record = json.dumps({"format": TABLE_FORMAT, "plan": plan.key, "samples": samples,
                          "values": values}, sort_keys=True)
     return hashlib.sha1(record.encode()).hexdigest()[:16]

@@ -20,8 +20,10 @@ the lower normal about ``n0``, from the view's plane.  Its transmitted closures 
 ``n0``, so their normals are baked too, in the frame of the view (``e_x`` along the view's tangential
 part, ``e_y = n0 x e_x``), with their anisotropies in the same image.  The view's plane is a mirror of
 the geometry, so ``phi`` runs over ``[0, pi]`` (:data:`AZIMUTH_SAMPLES` slices), and a point with the
-lower normal on the other side reads its slice with ``e_y`` turned over.  The slices lie one above the
-other in each image, each a block of the ``d`` rows with one row repeated at either edge (so that Cubic
+lower normal on the other side reads its slice with ``e_y`` turned over.  Near normal view these
+closures turn with the view about ``n0``, so a slice's texels run along the view's angle ``theta_v``
+(texel ``i`` at ``theta_v = pi/2 (1 - i / (W - 1))``), not its cosine.  The slices lie side by side in
+each image, each a block of the ``W`` columns with one column repeated at either edge (so that Cubic
 interpolation, which reads a texel beyond its position, stays within the slice); the shader reads the
 two slices about ``phi`` and mixes them linearly.
 """
@@ -38,7 +40,10 @@ from .closures import Closure, ShadingResult
 TABLE_FORMAT = 2  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
 # images); baked tables of another format are rebaked
 COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured: docs/tables.md)
-AZIMUTH_SAMPLES = 9  # slices over the lower normal's azimuth from the view's plane, 0..pi (measured: docs/tables.md)
+# A tilted boundary's tables (measured: docs/tables.md#a-tilted-boundary): slices over the lower normal's
+# azimuth from the view's plane (0..pi), and texels along the view's angle in each.
+AZIMUTH_SAMPLES = 25
+ANGLE_SAMPLES = 32
 PARALLEL_TOLERANCE = 1.0e-5  # a baked closure's normal may differ from n0 by this (rounding)
 
 
@@ -109,14 +114,14 @@ class TableLayout:
         return self.azimuths > 1
 
     @property
-    def block_height(self) -> int:
-        """Rows of one azimuth slice in an image: the ``d`` rows, and one repeated at each edge when sliced."""
-        return self.height + 2 if self.sliced else self.height
+    def block_width(self) -> int:
+        """Columns of one azimuth slice in an image: the ``W`` texels, and one repeated at each edge when sliced."""
+        return self.width + 2 if self.sliced else self.width
 
     @property
-    def image_height(self) -> int:
-        """Rows of each image."""
-        return self.azimuths * self.block_height
+    def image_width(self) -> int:
+        """Columns of each image."""
+        return self.azimuths * self.block_width
 
     def normal_image(self, k: int) -> int:
         """The image of oriented closure ``k``'s normal (colour, in the view's frame) and anisotropy (alpha)."""
@@ -131,19 +136,22 @@ class TableLayout:
 
 
 def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
-    """The lookup's image coordinates at the shading point: ``cos_v`` along x, the thickness's place
-    in ``[d_min, d_max]`` along y (the sockets' range, so a link's thickness is read where it lies),
-    each mapped onto the texels' centres (of the first slice, when sliced)."""
+    """The lookup's image coordinates at the shading point: the view's angle along x (``sqrt(cos_v)``, or
+    ``theta_v`` when sliced, in the first slice), the thickness's place in ``[d_min, d_max]`` along y (the
+    sockets' range, so a link's thickness is read where it lies), each mapped onto the texels' centres."""
     w, h = layout.width, layout.height
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-    x = ops.madd(ops.sqrt(cos_v), (w - 1.0) / w, 0.5 / w)
-    rows = float(layout.image_height)
+    if layout.sliced:
+        # The view's angle from n0, linearly: a tilted boundary's closures turn with the view about n0, so
+        # near normal view they vary with the angle, not its cosine.
+        along = 1.0 - ops.atan2(ops.length(v - n0 * ops.dot(v, n0)), cos_v) * (2.0 / math.pi)
+        x = ops.madd(along, (w - 1.0) / layout.image_width, 1.5 / layout.image_width)
+    else:
+        x = ops.madd(ops.sqrt(cos_v), (w - 1.0) / w, 0.5 / w)
     if h == 1:
-        return ops.combine(x, (layout.block_height * 0.5) / rows, 0.0)
+        return ops.combine(x, 0.5, 0.0)
     t = (d - P["d_min"]) / (P["d_max"] - P["d_min"])
-    if layout.sliced:  # within the slice's own rows
-        t = ops.clamp(t, 0.0, 1.0)
-    return ops.combine(x, ops.madd(t, (h - 1.0) / rows, (1.5 if layout.sliced else 0.5) / rows), 0.0)
+    return ops.combine(x, ops.madd(t, (h - 1.0) / h, 0.5 / h), 0.0)
 
 
 def view_frame(ops, n0, v, n1):
@@ -166,9 +174,9 @@ def _slice_reader(ops, layout: TableLayout, xy, phi):
     u = ops.clamp(phi * ((layout.azimuths - 1.0) / math.pi), 0.0, layout.azimuths - 1.0)
     i0 = ops.minimum(ops.floor(u), layout.azimuths - 2.0)
     f = u - i0
-    step = 1.0 / layout.azimuths  # a slice's height in image coordinates
-    xy0 = xy + ops.combine(0.0, i0 * step, 0.0)
-    xy1 = xy0 + ops.combine(0.0, step, 0.0)
+    step = 1.0 / layout.azimuths  # a slice's width in image coordinates
+    xy0 = xy + ops.combine(i0 * step, 0.0, 0.0)
+    xy1 = xy0 + ops.combine(step, 0.0, 0.0)
 
     def read(k):
         c0, a0 = ops.table(k, xy0)
