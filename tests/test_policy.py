@@ -62,23 +62,30 @@ def test_animating_other_parameters_changes_nothing(effect):
 
 
 def test_tables_only_for_constant_values():
-    """Baked tables where every value is a constant, the boundaries are parallel, the thickness is the
-    pattern's and the lobes Beckmann, in either backend; anything animated, Effects 'all', Evaluation
-    'arithmetic', OSL's Phong lobes, a tilted boundary or a linked thickness compute instead."""
+    """Baked tables where every value is a constant, the boundaries are parallel (or, in the node group,
+    tilted by a constant angle, within the tables' budget), the thickness is the pattern's and the lobes
+    Beckmann; anything animated, Effects 'all', Evaluation 'arithmetic', OSL's Phong lobes, a boundary
+    that follows the thickness or a linked thickness compute instead."""
     p = preset("oil_slick")
     assert plan_effects(p).tables and plan_effects(p).key.endswith("Tb")
     assert not plan_effects(p, {"e0"}).tables
     # The pattern's values are not in the tables: a flowing noise keeps them.
     assert plan_effects(p, {"noise_phase", "noise_scale"}) == plan_effects(p)
-    assert not plan_effects(p.replace(normal_mode="tilted", tilt=10.0), {"noise_phase"}).tables
-    assert plan_effects(p, {"tilt"}).tables and not plan_effects(p.replace(normal_mode="tilted"), {"tilt"}).tables
+    # A tilted boundary's tables hold its tilt, not the tilt's azimuth (turned point by point).
+    tilted = p.replace(normal_mode="tilted", tilt=10.0, d_min=300.0, d_max=330.0)
+    assert plan_effects(tilted).tables and plan_effects(tilted, {"noise_phase", "tilt_azimuth"}).tables
+    assert plan_effects(p, {"tilt"}).tables and not plan_effects(tilted, {"tilt"}).tables
+    assert not plan_effects(tilted, backend="osl").tables  # OSL reads tables of parallel boundaries only
+    # Many fringes over the thickness need more slices than the budget: computed.
+    assert not plan_effects(tilted.replace(d_max=900.0)).tables
+    assert not plan_effects(preset("fig5_correlated")).tables  # the lower normal follows the thickness
     assert not plan_effects(p, {THICKNESS_LINKED}).tables
     assert plan_effects(p, backend="osl") == plan_effects(p)
     assert not plan_effects(p.replace(lobe="phong"), backend="osl").tables
     assert not plan_effects(p.replace(effects="all")).tables
     assert not plan_effects(p.replace(evaluation="arithmetic")).tables
-    assert not plan_effects(p.replace(normal_mode="tilted", tilt=10.0)).tables
     assert plan_effects(p.replace(d_max=p.d_min)).tables  # a constant thickness: one row
+    assert plan_effects(tilted.replace(d_max=tilted.d_min)).tables
 
 
 def test_animation_only_adds_effects():

@@ -22,6 +22,7 @@ from layered_brdf_addon.blender.stored_keys import SETTINGS
 from layered_brdf_addon.model import preset
 from layered_brdf_addon.model.params import group_socket_name, LayeredParams
 from layered_brdf_addon.model.policy import plan_effects
+from layered_brdf_addon.model.table_bake import table_layout
 from layered_brdf_addon.model.sphere import sphere_geometry
 from layered_brdf_reference.compare import agreement
 
@@ -32,7 +33,7 @@ OIL = preset("oil_slick")
 
 
 def _images(group) -> list:
-    return [n.image for _, n in sorted(node_group_builder.table_nodes(group).items())]
+    return [readers[0].image for _, readers in sorted(node_group_builder.table_nodes(group).items())]
 
 
 def _texels(image) -> np.ndarray:
@@ -80,6 +81,32 @@ def test_a_change_rebakes_the_same_images_in_place():
     assert any(np.abs(_texels(i) - b).max() > 1e-4 for i, b in zip(images, before))
     assert _current(mat)
     assert len([i for i in bpy.data.images if tables.DIGEST_KEY in i]) == 4  # no leftovers
+
+
+def test_a_tilted_boundary_reads_each_image_at_two_slices_and_rebakes_them_in_place():
+    """A tilted boundary's tables: every image a row of azimuth slices, read by two Image Texture nodes
+    (the diffuse image, the same in every slice, by one); a new tilt rebakes the same images, a new tilt
+    azimuth (turned point by point) bakes nothing."""
+    tilted = OIL.replace(normal_mode="tilted", tilt=12.0, d_min=300.0, d_max=330.0)
+    mat = _apply(add_sphere(), tilted)
+    group = shader_node(mat).node_tree
+    assert group[node_group_builder.PLAN_KEY].endswith("Tb") and _current(mat)
+    layout = table_layout(tilted, plan_effects(tilted))
+    readers = node_group_builder.table_nodes(group)
+    assert sorted(readers) == list(range(layout.images)) and layout.oriented
+    for k, nodes in readers.items():
+        assert len(nodes) == (1 if k == layout.diffuse_image else 2)
+        assert all(n.image == nodes[0].image for n in nodes)
+    images = _images(group)
+    assert all(i.size[0] == layout.azimuths * (layout.width + 2) for i in images)
+    assert sum(i.size[0] * i.size[1] * 16 for i in images) <= 1 << 20
+    crcs = [i[tables.CHECKSUM_KEY] for i in images]
+    _apply(mat, tilted.replace(tilt_azimuth=45.0))
+    assert [i[tables.CHECKSUM_KEY] for i in images] == crcs
+    _apply(mat, tilted.replace(tilt=14.0))
+    assert shader_node(mat).node_tree == group and _images(group) == images and _current(mat)
+    assert [i[tables.CHECKSUM_KEY] for i in images] != crcs
+    assert len([i for i in bpy.data.images if tables.DIGEST_KEY in i]) == layout.images
 
 
 def test_a_value_typed_on_the_node_is_rebaked_when_the_material_syncs():
@@ -214,11 +241,11 @@ def test_a_change_of_the_row_count_keeps_the_node_s_values_links_and_the_group_s
     base = mat.node_tree.nodes.new("ShaderNodeBsdfTransparent")  # the artist's own shader under the film
     mat.node_tree.links.new(base.outputs[0], node.inputs["Base Shader"])
     node.inputs[group_socket_name(LayeredParams.spec("ks"))].default_value = 0.4
-    rows = node_group_builder.table_nodes(node.node_tree)[0].image.size[1]
+    rows = _images(node.node_tree)[0].size[1]
     node.inputs[group_socket_name(LayeredParams.spec("d_max"))].default_value = 900.0  # more fringes: more rows
     sync.sync_material(mat)
     node = shader_node(mat)
-    assert node_group_builder.table_nodes(node.node_tree)[0].image.size[1] > rows
+    assert _images(node.node_tree)[0].size[1] > rows
     assert node.node_tree.name == name and params_of(mat).d_max == pytest.approx(900.0)
     assert params_of(mat).ks == pytest.approx(0.4) and _current(mat)
     assert node.inputs["Base Shader"].links[0].from_node == base

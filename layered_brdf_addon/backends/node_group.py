@@ -30,6 +30,7 @@ OPEN_PANELS = ("Layer", "Specular", "Diffuse")  # open on a new node; the others
 PLAN_KEY = "layered_brdf_plan"
 TABLE_SLOT_KEY = "layered_brdf_table_slot"  # on a group's Image Texture node: which image of the tables it reads
 TABLE_SHAPE_KEY = "layered_brdf_table_shape"  # on a group built for tables: its layout
+TABLE_READERS_KEY = "layered_brdf_table_readers"  # on a group built for tables: how many Image Texture nodes read them
 
 
 def stamp_plans() -> list[EffectPlan]:
@@ -247,12 +248,25 @@ def _colour(ops, value):
 
 
 def table_nodes(group) -> dict:
-    """The Image Texture nodes of a group built for tables, by the image of the tables each reads."""
-    return {n[TABLE_SLOT_KEY]: n for n in group.nodes if n.bl_idname == "ShaderNodeTexImage" and TABLE_SLOT_KEY in n}
+    """The Image Texture nodes of a group built for tables, by the image of the tables each reads (a list:
+    a tilted boundary's group reads an image at two azimuth slices)."""
+    out = {}
+    for n in group.nodes:
+        if n.bl_idname == "ShaderNodeTexImage" and TABLE_SLOT_KEY in n:
+            out.setdefault(n[TABLE_SLOT_KEY], []).append(n)
+    return out
+
+
+def table_readers_intact(group, layout) -> bool:
+    """Whether ``group`` has every Image Texture node it was built with for tables of ``layout``."""
+    nodes = table_nodes(group)
+    return set(nodes) == set(range(layout.images)) and \
+        sum(len(n) for n in nodes.values()) == group.get(TABLE_READERS_KEY)
 
 
 def layout_record(layout) -> str:
-    return f"{layout.closures}:{layout.width}x{layout.height}"
+    record = f"{layout.closures}:{layout.width}x{layout.height}"
+    return record + f":{layout.azimuths} azimuths {layout.oriented}" if layout.sliced else record
 
 
 def build_into(group, plan: EffectPlan, layout=None) -> None:
@@ -312,6 +326,9 @@ def build_into(group, plan: EffectPlan, layout=None) -> None:
     group[PLAN_KEY] = plan.key
     if layout is not None:
         group[TABLE_SHAPE_KEY] = layout_record(layout)
-    elif TABLE_SHAPE_KEY in group:
-        del group[TABLE_SHAPE_KEY]
+        group[TABLE_READERS_KEY] = sum(len(nodes) for nodes in table_nodes(group).values())
+    else:
+        for key in (TABLE_SHAPE_KEY, TABLE_READERS_KEY):
+            if key in group:
+                del group[key]
     group["layered_brdf_node_count"] = ops.count

@@ -340,6 +340,11 @@ class NodeOps:
             return abs(x)
         return self.vmath("ABSOLUTE", x) if _kind(x) == "vector" else self.math("ABSOLUTE", x)
 
+    def floor(self, x):
+        if isinstance(x, Number):
+            return float(math.floor(x))
+        return self.math("FLOOR", x)
+
     def nan_to_zero(self, x):
         """``x``, or 0 where it is NaN: ``Maximum(0, x) + Minimum(0, x)`` (see clamp_input)."""
         return self.maximum(0.0, x) + self.minimum(0.0, x)

@@ -207,6 +207,9 @@ class OslOps:
     def abs(self, x):
         return self._unary("abs", x, abs)
 
+    def floor(self, x):
+        return self._unary("floor", x, lambda a: float(math.floor(a)))
+
     def nan_to_zero(self, x):
         return self.call_expr("nan_to_zero", (x,), "float")
 

@@ -81,8 +81,10 @@ def tables_current(group, params: LayeredParams, plan: EffectPlan, check_pixels:
     nodes = node_group_builder.table_nodes(group)
     digest = group[DIGEST_KEY]
     for k in range(layout.images):
-        image = nodes[k].image if k in nodes else None
-        if not image_intact(image, digest, k, (layout.height, layout.width)):
+        readers = nodes.get(k, [])
+        image = readers[0].image if readers else None
+        if any(n.image != image for n in readers) or \
+                not image_intact(image, digest, k, (layout.height, layout.image_width)):
             return False
         if check_pixels and not pixels_intact(image):
             return False
@@ -101,16 +103,18 @@ def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
     """Bake ``params``'s tables into ``group``'s images (made where missing or of another size, or used
     elsewhere), pack them and stamp images and group."""
     layout, texels = bake(params, plan)
-    texels = spline_coefficients(texels)  # what Cubic interpolation reads back as the baked values
+    texels = spline_coefficients(texels, layout)  # what Cubic interpolation reads back as the baked values
     digest = wanted_digest(params, plan)
     nodes = node_group_builder.table_nodes(group)
     for k in range(layout.images):
-        node = nodes[k]
-        image = node.image
-        if image is None or image.library is not None or image.users > 1 or DIGEST_KEY not in image or \
-                tuple(image.size) != (layout.width, layout.height) or not image.is_float:
-            image = _new_image(f"{IMAGE_PREFIX} {digest[-8:]} {k}", layout.width, layout.height)
-            node.image = image
+        readers = nodes[k]
+        image = readers[0].image
+        if image is None or image.library is not None or image.users > len(readers) or DIGEST_KEY not in image or \
+                any(n.image != image for n in readers) or \
+                tuple(image.size) != (layout.image_width, layout.height) or not image.is_float:
+            image = _new_image(f"{IMAGE_PREFIX} {digest[-8:]} {k}", layout.image_width, layout.height)
+            for node in readers:
+                node.image = image
         else:
             image.name = f"{IMAGE_PREFIX} {digest[-8:]} {k}"
             image.colorspace_settings.name = "Non-Color"
@@ -151,7 +155,7 @@ def ensure_tables(node, params: LayeredParams, plan: EffectPlan, check_pixels: b
     layout = table_layout(params, plan)
     # A group whose Image Texture nodes are not all there (an artist deleted one) counts as of another shape.
     same_shape = group.get(node_group_builder.TABLE_SHAPE_KEY) == node_group_builder.layout_record(layout) and \
-        set(node_group_builder.table_nodes(group)) == set(range(layout.images))
+        node_group_builder.table_readers_intact(group, layout)
     if same_shape and not _shared(group):
         _write(group, params, plan)
         return True
@@ -162,8 +166,9 @@ def ensure_tables(node, params: LayeredParams, plan: EffectPlan, check_pixels: b
     fresh = group.copy() if same_shape else bpy.data.node_groups.new(group.name, "ShaderNodeTree")
     if not same_shape:
         node_group_builder.build_into(fresh, plan, layout)
-    for n in node_group_builder.table_nodes(fresh).values():
-        n.image = None  # the copy's tables are its own
+    for readers in node_group_builder.table_nodes(fresh).values():
+        for n in readers:
+            n.image = None  # the copy's tables are its own
     name = group.name
     _write(fresh, params, plan)
     node.node_tree = fresh

@@ -358,6 +358,11 @@ def abs(x):  # noqa: A001 - the ops interface's name
     return np.abs(x)
 
 
+@_elementwise
+def floor(x):
+    return np.floor(x)
+
+
 def triple(x, y, z):
     """A constant channel triple."""
     return vec(np.array([x, y, z], dtype=float))

@@ -101,5 +101,6 @@ class EffectPlan:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")
         if self.tables:
-            out.append("closures read from tables baked for the material's values (view angle x thickness)")
+            axes = "view angle x thickness" + (" x the lower normal's azimuth" if self.normals == "tilted" else "")
+            out.append(f"closures read from tables baked for the material's values ({axes})")
         return out

@@ -16,7 +16,8 @@ from typing import Iterable
 from .params import LayeredParams, ParameterError, iter_sockets
 from .plan import EffectPlan
 from .shading.base_shader import CLEAR_K
-from .shading.tables import UNREAD_BY_TABLES, tabulable
+from .shading.tables import tabulable, unread_by_tables
+from .table_bake import fits
 
 #: The shader backends: a node group of stock nodes, or an OSL shader (Cycles CPU / OptiX).
 BACKENDS = ("nodes", "osl")
@@ -75,17 +76,17 @@ def supports(backend: str, lobe: str) -> bool:
 def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = "nodes") -> EffectPlan:
     """The effects the shader must contain for ``p`` on every frame, and whether the shader (the node
     group or the OSL shader) reads its closures from baked tables: where ``p.evaluation`` is "tables",
-    nothing the tables hold is animated (:data:`~.shading.tables.UNREAD_BY_TABLES` may be), the effects
-    are planned and the plan's closures can be tabulated (:func:`~.shading.tables.tabulable`).
+    nothing the tables hold is animated (:func:`~.shading.tables.unread_by_tables` may be), the effects
+    are planned and the plan's closures can be tabulated (:func:`~.shading.tables.tabulable`, and a tilted
+    boundary's slices fit :data:`~.table_bake.MAX_TABLE_BYTES`).
 
     ``animated``: names of parameters that may change between frames (keyframes, drivers,
     linked sockets), and :data:`THICKNESS_LINKED` where the Thickness input is linked.  See docs/effect-planning.md.
     """
     animated = frozenset(animated)
-    # Values the tables never hold may move (UNREAD_BY_TABLES: a flowing noise pattern); a tilt that moves
-    # makes a tilted boundary's plan tilted, which is not tabulable.
+    # Values the tables never hold may move (a flowing noise pattern); a tilted boundary's tables hold its tilt.
     tables = backend in BACKENDS and p.evaluation == "tables" and p.effects == "planned" and \
-        not (animated - UNREAD_BY_TABLES)
+        not (animated - unread_by_tables(p.normal_mode))
     if p.effects == "all":  # every effect stays, as if every socket could take any value
         animated |= {spec.name for spec in iter_sockets()}
 
@@ -115,7 +116,11 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
                       thickness=thickness, normals=normals, dispersion=dispersion, lobe=p.lobe,
                       spectral=spectral, interference=interference, analytic=analytic, optics=p.optics,
                       multibeam=multibeam, passes=passes, index=p.layer_index)
-    return replace(plan, tables=True) if tables and tabulable(plan) else plan
+    if not (tables and tabulable(plan, backend)):
+        return plan
+    if plan.normals == "tilted" and not fits(p, plan):
+        return plan
+    return replace(plan, tables=True)
 
 
 def beam_contrast(p: LayeredParams) -> float:

@@ -142,8 +142,9 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None) ->
     with ops.stage("Lower boundary normal n1: parallel, tilted or following d"):
         n1 = lower_normal(ops, P, n0, p_obj, d, plan, pattern)
     if plan.tables:
-        with ops.stage("Lobes and interference from the material's baked tables: the view's angle and d"):
-            res = tabulated_shade(ops, plan, layout, P, n0, v, d)
+        with ops.stage("Lobes and interference from the material's baked tables: the view's angle, d "
+                       "(and the lower normal's azimuth)"):
+            res = tabulated_shade(ops, plan, layout, P, n0, v, d, n1)
     else:
         with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
             inputs = program_inputs(P)

@@ -21,8 +21,9 @@ from .plan import EffectPlan
 from .program import shade, tabulated_shade
 from .shading.base_shader import passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
-from .shading.tables import (COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, UNREAD_BY_TABLES, NotTabulable,
-                             TableLayout, tabulable)
+from .shading.surface_prelude import DEG, rotate_about
+from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, NotTabulable,
+                             TableLayout, tabulable, unread_by_tables)
 from .shading.thin_film import harmonic_count
 
 SAMPLES_PER_FRINGE = 24  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
@@ -32,28 +33,43 @@ MAX_THICKNESS_SAMPLES = 1024
 SHORTEST_NM = 400.0  # the bluest wavelength a plan evaluates (spectral modes reach below the RGB channels' 465 nm)
 
 
-def thickness_samples(params: LayeredParams, plan: EffectPlan, images: int = 1) -> int:
-    """Texels along the thickness: 1 for a constant one, else enough for :data:`SAMPLES_PER_FRINGE` per fringe
-    (a fringe is ``lambda / (2 r1)`` of thickness at normal incidence, the shortest; the beams that bounce
-    inside the layer add harmonics), at least :data:`MIN_THICKNESS_SAMPLES`, at most what keeps ``images``
-    images of :data:`COS_SAMPLES` texels a row within :data:`MAX_TABLE_BYTES` (and
-    :data:`MAX_THICKNESS_SAMPLES`)."""
-    if plan.thickness == "constant":
-        return 1
+def _fringe_samples(params: LayeredParams, plan: EffectPlan) -> int:
+    """Texels along the thickness that its interference needs: :data:`SAMPLES_PER_FRINGE` per fringe (a
+    fringe is ``lambda / (2 r1)`` of thickness at normal incidence, the shortest; the beams that bounce
+    inside the layer add harmonics), at least :data:`MIN_THICKNESS_SAMPLES`."""
     if not plan.interference:
         return MIN_THICKNESS_SAMPLES
     fringes = 2.0 * max(params.r1) * abs(params.d_max - params.d_min) / SHORTEST_NM * harmonic_count(plan)
-    most = min(MAX_TABLE_BYTES // (images * COS_SAMPLES * 16), MAX_THICKNESS_SAMPLES)
-    return int(min(max(math.ceil(SAMPLES_PER_FRINGE * fringes) + 1, MIN_THICKNESS_SAMPLES), most))
+    return max(math.ceil(SAMPLES_PER_FRINGE * fringes) + 1, MIN_THICKNESS_SAMPLES)
 
 
-def _grid(width: int, height: int, d_min, d_max):
-    """View directions and thicknesses of the texels, (H, W): n0 = +z, the view in the xz plane."""
-    c = np.linspace(0.0, 1.0, width) ** 2
+def _most_rows(images: int, azimuths: int) -> int:
+    """The most texels along the thickness that keep ``images`` images within :data:`MAX_TABLE_BYTES`."""
+    if azimuths > 1:  # each slice repeats a column at either edge
+        return min(MAX_TABLE_BYTES // (images * azimuths * (ANGLE_SAMPLES + 2) * 16), MAX_THICKNESS_SAMPLES)
+    return min(MAX_TABLE_BYTES // (images * COS_SAMPLES * 16), MAX_THICKNESS_SAMPLES)
+
+
+def thickness_samples(params: LayeredParams, plan: EffectPlan, images: int = 1, azimuths: int = 1) -> int:
+    """Texels along the thickness: 1 for a constant one, else what its interference needs
+    (:func:`_fringe_samples`), at most what keeps ``images`` images of :data:`COS_SAMPLES` texels a row
+    (or ``azimuths`` slices of :data:`ANGLE_SAMPLES`) within :data:`MAX_TABLE_BYTES` (and :data:`MAX_THICKNESS_SAMPLES`)."""
+    if plan.thickness == "constant":
+        return 1
+    return int(min(_fringe_samples(params, plan), _most_rows(images, azimuths)))
+
+
+def _grid(width: int, height: int, d_min, d_max, azimuths: int = 1):
+    """View directions, thicknesses and lower normals' azimuths (from the view's plane) of the texels,
+    (A, H, W): n0 = +z, the view in the xz plane towards +x, at ``sqrt(cos_v) = i / (W - 1)`` (with
+    azimuths, at the angle ``pi/2 (1 - i / (W - 1))``)."""
+    c = np.cos((1.0 - np.linspace(0.0, 1.0, width)) * (0.5 * math.pi)) if azimuths > 1 else \
+        np.linspace(0.0, 1.0, width) ** 2
     t = np.linspace(0.0, 1.0, height) if height > 1 else np.zeros(1)
-    C, T = np.meshgrid(c, t)
+    a = np.linspace(0.0, math.pi, azimuths) if azimuths > 1 else np.zeros(1)
+    A, T, C = np.meshgrid(a, t, c, indexing="ij")
     v = np.stack([np.sqrt(np.maximum(1.0 - C * C, 0.0)), np.zeros_like(C), C], axis=-1)
-    return v, d_min + (d_max - d_min) * T
+    return v, d_min + (d_max - d_min) * T, A
 
 
 def held_values(params: LayeredParams, backend: str, plan: EffectPlan | None = None) -> dict:
@@ -71,18 +87,24 @@ def _arithmetic(plan: EffectPlan) -> EffectPlan:
     return replace(plan, tables=False)
 
 
-def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int):
-    """The program's closures at the texels (:func:`_grid`), and the Base Shader's factor."""
+def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int, azimuths: int = 1):
+    """The program's closures at the texels (:func:`_grid`, shape (A, H, W)), the Base Shader's factor, and
+    the upper normal; a tilted boundary's lower normal is ``n0`` tilted by the material's tilt towards each
+    texel's azimuth."""
     plan = _arithmetic(plan)
     values = held_values(params, ShadingPoint.SOCKETS)
-    n0 = np.zeros((height, width, 3))
+    n0 = np.zeros((azimuths, height, width, 3))
     n0[..., 2] = 1.0
     pt = ShadingPoint(values, n0, n0, np.zeros_like(n0))
     P = clamped_inputs(pt, plan)
-    v, d = _grid(width, height, float(P["d_min"]), float(P["d_max"]))
+    v, d, phi = _grid(width, height, float(P["d_min"]), float(P["d_max"]), azimuths)
     inputs = program_inputs(P)
     n0v, vv = ops_numpy.vec(n0), ops_numpy.vec(v)
-    res = shade(pt, inputs, n0v, n0v, d, vv, plan, WAVELENGTHS_NM)
+    n1v = n0v
+    if plan.normals == "tilted":
+        axis = ops_numpy.vec(np.stack([-np.sin(phi), np.cos(phi), np.zeros_like(phi)], axis=-1))
+        n1v = rotate_about(pt, n0v, axis, float(P["tilt"]) * DEG)
+    res = shade(pt, inputs, n0v, n1v, d, vv, plan, WAVELENGTHS_NM)
     return res, passed_to_base(pt, plan, inputs, vv, n0v), n0
 
 
@@ -90,21 +112,49 @@ def _is_zero(x) -> bool:
     return isinstance(x, float) and x == 0.0
 
 
+PROBE_TILT = 10.0  # degrees: the tilt at which a plan's closures are probed for normals off n0
+
+
 @lru_cache(maxsize=64)
 def _closures(plan: EffectPlan) -> tuple:
-    """The plan's glossy closures: names and the channels each weighs (the program's structure,
-    the same for every value of the parameters)."""
-    res, _, _ = _shade_grid(LayeredParams(), plan, 2, 1)
-    return tuple((cl.name, tuple(c for c in range(3) if not _is_zero(cl.weight[c]))) for cl in res.glossy)
+    """The plan's glossy closures: names and the channels each weighs, and which of them do not lie about
+    the upper normal (the program's structure, the same for every value of the parameters)."""
+    probe = LayeredParams(tilt=PROBE_TILT) if plan.normals == "tilted" else LayeredParams()
+    res, _, _ = _shade_grid(probe, plan, 4, 1, AZIMUTH_SAMPLES if plan.normals == "tilted" else 1)
+    closures = tuple((cl.name, tuple(c for c in range(3) if not _is_zero(cl.weight[c]))) for cl in res.glossy)
+    oriented = tuple(k for k, cl in enumerate(res.glossy) if _off_normal(cl.normal) > PARALLEL_TOLERANCE)
+    return closures, oriented
+
+
+def _off_normal(normal) -> float:
+    """How far a baked closure normal lies from ``n0 = +z``, at most."""
+    return max(float(np.max(np.abs(np.asarray(a, dtype=float) - b)))
+               for a, b in zip(ops_numpy.components(normal), (0.0, 0.0, 1.0)))
 
 
 def table_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
-    """The layout of ``params``'s tables for ``plan`` (NotTabulable where the plan's closures depend on more)."""
+    """The layout of ``params``'s tables for ``plan`` (NotTabulable where the plan's closures depend on more,
+    or a tilted boundary's slices would need more than :data:`MAX_TABLE_BYTES`)."""
     if not tabulable(plan):
         raise NotTabulable(f"plan {plan.key}: the closures depend on more than the view and the thickness")
-    closures = _closures(replace(plan, tables=False))
-    images = TableLayout(closures, COS_SAMPLES, 1).images
-    return TableLayout(closures, COS_SAMPLES, thickness_samples(params, plan, images))
+    closures, oriented = _closures(replace(plan, tables=False))
+    azimuths = AZIMUTH_SAMPLES if plan.normals == "tilted" else 1
+    width = ANGLE_SAMPLES if azimuths > 1 else COS_SAMPLES
+    images = TableLayout(closures, width, 1, azimuths, oriented).images
+    height = thickness_samples(params, plan, images, azimuths)
+    if azimuths > 1 and plan.thickness != "constant" and _fringe_samples(params, plan) > height:
+        raise NotTabulable(f"plan {plan.key}: a tilted boundary's tables for {_fringe_samples(params, plan)} "
+                           f"thickness rows would exceed {MAX_TABLE_BYTES} bytes")
+    return TableLayout(closures, width, height, azimuths, oriented)
+
+
+def fits(params: LayeredParams, plan: EffectPlan) -> bool:
+    """Whether ``params``'s tables for ``plan`` can be baked (:func:`table_layout` does not refuse them)."""
+    try:
+        table_layout(params, plan)
+    except NotTabulable:
+        return False
+    return True
 
 
 def _plane(x, shape) -> np.ndarray:
@@ -112,26 +162,44 @@ def _plane(x, shape) -> np.ndarray:
 
 
 def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarray]:
-    """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, H, W, 4)."""
+    """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, H, image_width, 4),
+    a tilted boundary's azimuth slices side by side, each with its edge columns repeated."""
     layout = table_layout(params, plan)
-    res, base, n0 = _shade_grid(params, plan, layout.width, layout.height)
-    shape = (layout.height, layout.width)
+    res, base, n0 = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
+    shape = (layout.azimuths, layout.height, layout.width)
     out = np.zeros((layout.images, *shape, 4), dtype=np.float32)
     for k, cl in enumerate(res.glossy):
-        normal = ops_numpy.components(cl.normal)
-        if max(float(np.max(np.abs(_plane(a, shape) - b))) for a, b in zip(normal, (0.0, 0.0, 1.0))) > \
-                PARALLEL_TOLERANCE:
+        image, channel = layout.anisotropy_slot(k)
+        if k in layout.oriented:
+            for c, a in enumerate(ops_numpy.components(cl.normal)):
+                out[image, ..., c] = _plane(a, shape)
+        elif _off_normal(cl.normal) > PARALLEL_TOLERANCE:
             raise NotTabulable(f"closure {cl.name} does not lie about the upper normal")
         for c in range(3):
             out[k, ..., c] = _plane(cl.weight[c], shape)
         out[k, ..., 3] = np.sqrt(np.clip(_plane(cl.alpha, shape), 0.0, 1.0))
-        image, channel = layout.anisotropy_slot(k)
         out[image, ..., channel] = _plane(cl.anisotropy, shape)
     if res.diffuse is not None:
         for c in range(3):
             out[layout.diffuse_image, ..., c] = _plane(res.diffuse[c], shape)
     out[layout.diffuse_image, ..., 3] = _plane(base, shape)
-    return layout, out
+    return layout, _stack_slices(out, layout)
+
+
+def _stack_slices(texels: np.ndarray, layout: TableLayout) -> np.ndarray:
+    """(images, A, H, W, 4) as the images hold them: (images, H, W, 4), or with slices side by side, each
+    slice's columns with the first and last repeated, (images, H, A (W + 2), 4)."""
+    if layout.sliced:
+        texels = np.concatenate([texels[..., :1, :], texels, texels[..., -1:, :]], axis=3)
+    n = texels.shape[0]
+    return np.ascontiguousarray(np.moveaxis(texels, 1, 2).reshape(n, layout.height, layout.image_width, 4))
+
+
+def _unstack_slices(texels: np.ndarray, layout: TableLayout) -> np.ndarray:
+    """The slices of images (images, H, A (W + 2), 4) without their repeated columns: (images, A, H, W, 4)."""
+    n = texels.shape[0]
+    blocks = texels.reshape(n, layout.height, layout.azimuths, layout.block_width, 4)[..., 1:-1, :]
+    return np.moveaxis(blocks, 2, 1)
 
 
 def _prefilter(values: np.ndarray, axis: int) -> np.ndarray:
@@ -156,33 +224,43 @@ def _prefilter(values: np.ndarray, axis: int) -> np.ndarray:
     return np.moveaxis(a, 0, axis)
 
 
-def spline_coefficients(texels: np.ndarray) -> np.ndarray:
+def spline_coefficients(texels: np.ndarray, layout: TableLayout | None = None) -> np.ndarray:
     """What the node group's images hold: for each image (images, H, W, RGBA), the cubic B-spline
     coefficients that Cubic interpolation (Cycles' and EEVEE's Image Texture) turns back into the baked
     values at the texel centres, smooth in between (float32).  Cubic rather than Linear interpolation:
     EEVEE reads Linear images through mipmaps chosen from screen-space derivatives, which a thickness
-    noise makes erratic (a dotted pattern), and Cubic reads level 0 only."""
-    return _prefilter(_prefilter(texels, 1), 2).astype(np.float32)
+    noise makes erratic (a dotted pattern), and Cubic reads level 0 only.  With a sliced ``layout``
+    (:class:`TableLayout`), each slice is a spline of its own, its repeated edge columns the coefficients at
+    its edges (what a clamped index reads)."""
+    if layout is None or not layout.sliced:
+        return _prefilter(_prefilter(texels, 1), 2).astype(np.float32)
+    coefficients = _prefilter(_prefilter(_unstack_slices(texels, layout), 2), 3)
+    return _stack_slices(coefficients, layout).astype(np.float32)
 
 
 def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
     """What the tables of ``params`` for ``plan`` depend on, as a short digest: the table format, the
-    plan, and every value the tables hold (not the pattern's, :data:`.shading.tables.UNREAD_BY_TABLES`)."""
-    values = {k: v for k, v in held_values(params, "nodes", plan).items() if k not in UNREAD_BY_TABLES}
-    record = json.dumps({"format": TABLE_FORMAT, "plan": plan.key, "samples": [COS_SAMPLES, SAMPLES_PER_FRINGE],
+    plan, and every value the tables hold (not the pattern's, :func:`.shading.tables.unread_by_tables`)."""
+    unread = unread_by_tables(plan.normals)
+    values = {k: v for k, v in held_values(params, "nodes", plan).items() if k not in unread}
+    samples = [COS_SAMPLES, SAMPLES_PER_FRINGE] + \
+        ([AZIMUTH_SAMPLES, ANGLE_SAMPLES] if plan.normals == "tilted" else [])
+    record = json.dumps({"format": TABLE_FORMAT, "plan": plan.key, "samples": samples,
                          "values": values}, sort_keys=True)
     return hashlib.sha1(record.encode()).hexdigest()[:16]
 
 
 
-def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayout, texels: np.ndarray, n0, v, d):
-    """What the group reading these tables returns at points of upper normal ``n0``, view ``v`` and
-    thickness ``d`` (numpy arrays): the program's tabulated step on numpy, reading ``texels`` (a bake's)
-    as Cycles' Image Texture reads the images the group holds (:func:`spline_coefficients`,
-    :func:`.ops_numpy.table_lookup`)."""
+def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayout, texels: np.ndarray, n0, v, d,
+                     n1=None):
+    """What the group reading these tables returns at points of upper normal ``n0``, view ``v``, thickness
+    ``d`` and lower normal ``n1`` (numpy arrays; ``n1`` where the layout is sliced): the program's tabulated
+    step on numpy, reading ``texels`` (a bake's) as Cycles' Image Texture reads the images the group holds
+    (:func:`spline_coefficients`, :func:`.ops_numpy.table_lookup`)."""
     n0 = np.asarray(n0, dtype=float)
     pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0),
-                      tables=spline_coefficients(texels))
+                      tables=spline_coefficients(texels, layout))
     P = clamped_inputs(pt, plan)
+    lower = None if n1 is None else ops_numpy.vec(np.asarray(n1, dtype=float))
     return tabulated_shade(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), pt.incoming(),
-                           np.asarray(d, dtype=float))
+                           np.asarray(d, dtype=float), lower)

@@ -14,18 +14,36 @@ alpha: the Glossy BSDF's Roughness, ``sqrt(alpha)``), one for the diffuse colour
 Shader's factor, and the closures' anisotropies four to an image.  Texel ``(i, j)`` holds the
 values at ``cos_v = (i / (W - 1))^2`` (denser towards grazing views) and ``d = d_min + (d_max -
 d_min) j / (H - 1)``; a lookup puts ``cos_v = 0`` and ``1`` on the first and last texels' centres.
+
+A tilted lower boundary (a constant tilt ``tau``) adds a third per-point scalar: the azimuth ``phi`` of
+the lower normal about ``n0``, from the view's plane.  Its transmitted closures no longer lie about
+``n0``, so their normals are baked too, in the frame of the view (``e_x`` along the view's tangential
+part, ``e_y = n0 x e_x``), with their anisotropies in the same image.  The view's plane is a mirror of
+the geometry, so ``phi`` runs over ``[0, pi]`` (:data:`AZIMUTH_SAMPLES` slices), and a point with the
+lower normal on the other side reads its slice with ``e_y`` turned over.  Near normal view these
+closures turn with the view about ``n0``, so a slice's texels run along the view's angle ``theta_v``
+(texel ``i`` at ``theta_v = pi/2 (1 - i / (W - 1))``), not its cosine.  The slices lie side by side in
+each image, each a block of the ``W`` columns with one column repeated at either edge (so that Cubic
+interpolation, which reads a texel beyond its position, stays within the slice); the shader reads the
+two slices about ``phi`` and mixes them linearly.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from ..plan import EffectPlan
+import math
+
 from .base_shader import base_receives_light
 from .closures import Closure, ShadingResult
 
 TABLE_FORMAT = 2  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
 # images); baked tables of another format are rebaked
 COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured: docs/tables.md)
+# A tilted boundary's tables (measured: docs/tables.md#a-tilted-boundary): slices over the lower normal's
+# azimuth from the view's plane (0..pi), and texels along the view's angle in each.
+AZIMUTH_SAMPLES = 25
+ANGLE_SAMPLES = 32
 PARALLEL_TOLERANCE = 1.0e-5  # a baked closure's normal may differ from n0 by this (rounding)
 
 
@@ -37,15 +55,23 @@ UNREAD_BY_TABLES = frozenset({"noise_scale", "noise_detail", "noise_roughness", 
                               "tilt_azimuth", "bump_strength"})
 
 
+def unread_by_tables(normals: str) -> frozenset:
+    """:data:`UNREAD_BY_TABLES` for a lower boundary of mode ``normals``: a tilted boundary's tables hold
+    its tilt (not the tilt's azimuth, which turns the lower normal about ``n0`` point by point)."""
+    return UNREAD_BY_TABLES - {"tilt"} if normals == "tilted" else UNREAD_BY_TABLES
+
+
 class NotTabulable(ValueError):
     """The plan's closures depend on more than the view's cosine and the thickness."""
 
 
-def tabulable(plan: EffectPlan) -> bool:
-    """Whether the closures of ``plan`` can be baked: parallel boundaries (every closure about ``n0``),
-    a thickness from the material's pattern or a constant (a linked thickness has no known range),
-    Beckmann lobes (the node group's)."""
-    return plan.normals == "parallel" and plan.thickness in ("noise", "height", "constant") and \
+def tabulable(plan: EffectPlan, backend: str = "nodes") -> bool:
+    """Whether the closures of ``plan`` can be baked: a lower boundary parallel (every closure about
+    ``n0``) or, in the node group, tilted by a constant angle (the closures' normals baked too); a
+    thickness from the material's pattern or a constant (a linked thickness has no known range);
+    Beckmann lobes (the node group's).  The OSL shader reads tables of parallel boundaries only."""
+    normals = ("parallel", "tilted") if backend == "nodes" else ("parallel",)
+    return plan.normals in normals and plan.thickness in ("noise", "height", "constant") and \
         plan.lobe == "beckmann"
 
 
@@ -55,11 +81,15 @@ class TableLayout:
 
     ``closures``: the glossy closures' names, in the program's order, each with the channels
     its weight has (a dispersive plan's per-channel closures weigh one channel);
-    ``width``, ``height``: texels along ``cos_v`` and ``d`` (1 for a constant thickness)."""
+    ``width``, ``height``: texels along ``cos_v`` and ``d`` (1 for a constant thickness);
+    ``azimuths``: slices over the lower normal's azimuth (1: parallel boundaries, no slices);
+    ``oriented``: the closures whose normals are baked (those that do not lie about ``n0``)."""
 
     closures: tuple[tuple[str, tuple[int, ...]], ...]
     width: int
     height: int
+    azimuths: int = 1
+    oriented: tuple[int, ...] = ()
 
     @property
     def closure_images(self) -> int:
@@ -67,50 +97,121 @@ class TableLayout:
 
     @property
     def anisotropy_images(self) -> int:
-        return (len(self.closures) + 3) // 4
+        return (len(self.closures) - len(self.oriented) + 3) // 4
 
     @property
     def images(self) -> int:
-        """Images in all: the closures', the diffuse colour's (with the Base Shader's factor), the anisotropies'."""
-        return self.closure_images + 1 + self.anisotropy_images
+        """Images in all: the closures', the diffuse colour's (with the Base Shader's factor), the
+        anisotropies', the baked normals' (one per oriented closure, with its anisotropy)."""
+        return self.closure_images + 1 + self.anisotropy_images + len(self.oriented)
 
     @property
     def diffuse_image(self) -> int:
         return self.closure_images
 
+    @property
+    def sliced(self) -> bool:
+        return self.azimuths > 1
+
+    @property
+    def block_width(self) -> int:
+        """Columns of one azimuth slice in an image: the ``W`` texels, and one repeated at each edge when sliced."""
+        return self.width + 2 if self.sliced else self.width
+
+    @property
+    def image_width(self) -> int:
+        """Columns of each image."""
+        return self.azimuths * self.block_width
+
+    def normal_image(self, k: int) -> int:
+        """The image of oriented closure ``k``'s normal (colour, in the view's frame) and anisotropy (alpha)."""
+        return self.closure_images + 1 + self.anisotropy_images + self.oriented.index(k)
+
     def anisotropy_slot(self, k: int) -> tuple[int, int]:
         """(image, channel) of closure ``k``'s anisotropy."""
-        return self.closure_images + 1 + k // 4, k % 4
+        if k in self.oriented:
+            return self.normal_image(k), 3
+        j = sum(1 for i in range(k) if i not in self.oriented)
+        return self.closure_images + 1 + j // 4, j % 4
 
 
 def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
-    """The lookup's image coordinates at the shading point: ``cos_v`` along x, the thickness's place
-    in ``[d_min, d_max]`` along y (the sockets' range, so a link's thickness is read where it lies),
-    each mapped onto the texels' centres."""
+    """The lookup's image coordinates at the shading point: the view's angle along x (``sqrt(cos_v)``, or
+    ``theta_v`` when sliced, in the first slice), the thickness's place in ``[d_min, d_max]`` along y (the
+    sockets' range, so a link's thickness is read where it lies), each mapped onto the texels' centres."""
     w, h = layout.width, layout.height
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-    x = ops.madd(ops.sqrt(cos_v), (w - 1.0) / w, 0.5 / w)
+    if layout.sliced:
+        # The view's angle from n0, linearly: a tilted boundary's closures turn with the view about n0, so
+        # near normal view they vary with the angle, not its cosine.
+        along = 1.0 - ops.atan2(ops.length(v - n0 * ops.dot(v, n0)), cos_v) * (2.0 / math.pi)
+        x = ops.madd(along, (w - 1.0) / layout.image_width, 1.5 / layout.image_width)
+    else:
+        x = ops.madd(ops.sqrt(cos_v), (w - 1.0) / w, 0.5 / w)
     if h == 1:
         return ops.combine(x, 0.5, 0.0)
     t = (d - P["d_min"]) / (P["d_max"] - P["d_min"])
     return ops.combine(x, ops.madd(t, (h - 1.0) / h, 0.5 / h), 0.0)
 
 
-def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d) -> ShadingResult:
+def view_frame(ops, n0, v, n1):
+    """The frame the tables of a tilted boundary are baked in: ``e_x`` along the view's tangential part
+    (at normal view, the lower normal's), ``e_y = n0 x e_x``; and the lower normal's azimuth from
+    ``e_x``, ``|phi|`` in ``[0, pi]``, with the side ``s`` (+-1) of the view's plane it lies on."""
+    lower = ops.normalize(n1 - n0 * ops.dot(n1, n0), ops.cross(n0, (0.0, 0.0, 1.0)))
+    e_x = ops.normalize(v - n0 * ops.dot(v, n0), lower)
+    e_y = ops.cross(n0, e_x)
+    b = ops.dot(n1, e_y)
+    phi = ops.atan2(ops.abs(b), ops.dot(n1, e_x))
+    return e_x, e_y, phi, ops.select(ops.lt(b, 0.0), -1.0, 1.0)
+
+
+def _slice_reader(ops, layout: TableLayout, xy, phi):
+    """``read(k)``: image ``k`` at ``xy`` (in the first slice) interpolated linearly between the two
+    slices about ``phi``; without slices, image ``k`` at ``xy``."""
+    if not layout.sliced:
+        return lambda k: ops.table(k, xy)
+    u = ops.clamp(phi * ((layout.azimuths - 1.0) / math.pi), 0.0, layout.azimuths - 1.0)
+    i0 = ops.minimum(ops.floor(u), layout.azimuths - 2.0)
+    f = u - i0
+    step = 1.0 / layout.azimuths  # a slice's width in image coordinates
+    xy0 = xy + ops.combine(i0 * step, 0.0, 0.0)
+    xy1 = xy0 + ops.combine(step, 0.0, 0.0)
+
+    def read(k):
+        c0, a0 = ops.table(k, xy0)
+        c1, a1 = ops.table(k, xy1)
+        return c0 + (c1 - c0) * f, a0 + (a1 - a0) * f
+    return read
+
+
+def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, n1=None) -> ShadingResult:
     """The closures of :func:`..program.shade` read from the baked tables (``ops.table(k, xy)``:
-    image ``k``'s colour and alpha at ``xy``), with the Base Shader's factor in ``extras``."""
+    image ``k``'s colour and alpha at ``xy``), with the Base Shader's factor in ``extras``; ``n1``:
+    the lower normal (read where the layout is sliced by its azimuth)."""
     xy = table_coordinates(ops, layout, P, n0, v, d)
+    phi = side = e_x = e_y = None
+    if layout.sliced:
+        e_x, e_y, phi, side = view_frame(ops, n0, v, n1)
+    read = _slice_reader(ops, layout, xy, phi)
     res = ShadingResult()
     anisotropies = {}  # image -> its four channels
     tangent = ops.cross(n0, v)
     for k, (name, _) in enumerate(layout.closures):
         image, channel = layout.anisotropy_slot(k)
         if image not in anisotropies:
-            colour, alpha = ops.table(image, xy)
+            colour, alpha = read(image)
             anisotropies[image] = [*ops.components(colour), alpha]
-        colour, roughness = ops.table(k, xy)
-        res.glossy.append(Closure(name, n0, None, roughness * roughness, colour, anisotropies[image][channel],
-                                  tangent, roughness))
+        normal, u = n0, tangent
+        if k in layout.oriented:
+            x, y, z = anisotropies[image][:3]
+            normal = ops.normalize(e_x * x + e_y * (y * side) + n0 * z, n0)
+            u = ops.cross(normal, v)
+        colour, roughness = read(k)
+        res.glossy.append(Closure(name, normal, None, roughness * roughness, colour, anisotropies[image][channel],
+                                  u, roughness))
+    # The diffuse colour and the Base Shader's factor do not depend on the lower normal: every slice holds
+    # them, and the first is read.
     colour, base = ops.table(layout.diffuse_image, xy)
     if plan.diffuse:
         res.diffuse = colour
