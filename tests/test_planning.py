@@ -59,7 +59,7 @@ EQUAL = preset("fig4_tilted").replace(r1_r=1.5, r1_g=1.5, r1_b=1.5, thickness_mo
                                       d_max=500.0)
 # Computed closures in both of a pair (baked tables are compared with them in test_tables.py).
 FLAT = preset("fig4_tilted").replace(tilt=0.0, d_min=120.0, d_max=120.0, evaluation="arithmetic")
-DISPERSIVE = preset("fig6_medium").replace(thickness_mode="height")
+DISPERSIVE = preset("fig6_medium").replace(thickness_mode="height", evaluation="arithmetic")
 
 
 @pytest.fixture(scope="module", params=["nodes", "osl"])

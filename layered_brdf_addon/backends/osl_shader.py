@@ -26,7 +26,7 @@ from ..model.params import (BASE_COLOR_DESCRIPTION, THICKNESS_DESCRIPTION, THICK
                             socket_name)
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
-from ..model.shading.tables import TableLayout
+from ..model.shading.tables import TableLayout, tabulable
 from .osl_ops import OslOps
 from .osl_text import PREC_ATOM, FunctionBody, Val, literal, run_capturing_locals
 
@@ -328,6 +328,8 @@ def tabulated_shader_source(plan: EffectPlan, layout: TableLayout, texels: np.nd
     RGBA, :func:`~..model.table_bake.bake`), laid out as ``layout`` says."""
     if not plan.tables:
         raise ValueError(f"plan {plan.key} computes its closures: it reads no tables")
+    if not tabulable(plan, "osl"):
+        raise ValueError(f"plan {plan.key}: the OSL shader reads tables of parallel boundaries only")
     texels = np.ascontiguousarray(texels, dtype=np.float32)
     if texels.shape != (layout.images, layout.height, layout.width, 4):
         raise ValueError(f"texels of shape {texels.shape} for tables of {layout.images} images of "
