@@ -177,7 +177,7 @@ def osl_rebuild_cost(mat, params) -> float:
 
 def bake_cost(params) -> tuple[float | None, int | None]:
     """Median wall time (ms) of a bake of ``params``'s tables, and their size in bytes; None where the
-    plan computes its closures (a tilted or thickness-following boundary)."""
+    plan computes its closures (a boundary that follows the thickness, a tilted one beyond its budget)."""
     import numpy as np
 
     from layered_brdf_addon.model.policy import plan_effects

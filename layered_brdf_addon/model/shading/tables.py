@@ -29,11 +29,10 @@ two slices about ``phi`` and mixes them linearly.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from ..plan import EffectPlan
-import math
-
 from .base_shader import base_receives_light
 from .closures import Closure, ShadingResult
 
