@@ -288,6 +288,19 @@ class NodeOps:
                          clamp_factor=True)
         return self.out(n, d, "Result_Float", "float")
 
+    def mix(self, a, b, t):
+        """``a + (b - a) t``: one Mix node (unclamped), of vectors where ``a`` or ``b`` is one."""
+        if all(isinstance(x, Number) for x in (a, b, t)):
+            return a + (b - a) * t
+        if self._vector_args(a, b):
+            n, d = self.node("ShaderNodeMix", {"Factor_Float": t, "A_Vector": self.broadcast(a),
+                                               "B_Vector": self.broadcast(b)},
+                             data_type="VECTOR", factor_mode="UNIFORM", clamp_factor=False)
+            return self.out(n, d, "Result_Vector", "vector")
+        n, d = self.node("ShaderNodeMix", {"Factor_Float": t, "A_Float": a, "B_Float": b}, data_type="FLOAT",
+                         clamp_factor=False)
+        return self.out(n, d, "Result_Float", "float")
+
     def select_vec(self, c, a, b):
         n, d = self.node("ShaderNodeMix", {"Factor_Float": c, "A_Vector": b, "B_Vector": a}, data_type="VECTOR",
                          factor_mode="UNIFORM", clamp_factor=True)

@@ -171,6 +171,13 @@ class OslOps:
             return a
         return self._select(c, a, b, "float")
 
+    def mix(self, a, b, t):
+        if all(isinstance(x, Number) for x in (a, b, t)):
+            return a + (b - a) * t
+        vector = "vector" in (kind_of(a), kind_of(b))
+        return self.call_expr("mix", (self._triple(a, vector), self._triple(b, vector), t),
+                              "vector" if vector else "float")
+
     def select_vec(self, c, a, b):
         return self._select(c, a, b, "vector")
 

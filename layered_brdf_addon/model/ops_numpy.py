@@ -103,6 +103,11 @@ def select(c, a, b):
     return np.where(np.asarray(c) > 0.5, a, b)
 
 
+def mix(a, b, t):
+    """``a + (b - a) t``."""
+    return a + (b - a) * t
+
+
 def select_vec(c, a, b):
     return vec(np.where((_s(c) > 0.5)[..., None], _plain(a), _plain(b)))
 

@@ -156,13 +156,14 @@ def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
 def view_frame(ops, n0, v, n1):
     """The frame the tables of a tilted boundary are baked in: ``e_x`` along the view's tangential part
     (at normal view, the lower normal's), ``e_y = n0 x e_x``; and the lower normal's azimuth from
-    ``e_x``, ``|phi|`` in ``[0, pi]``, with the side ``s`` (+-1) of the view's plane it lies on."""
+    ``e_x``, ``|phi|`` in ``[0, pi]``.  ``e_y`` comes turned over where the lower normal lies on its
+    negative side, so that a closure normal baked at ``|phi|`` is ``x e_x + y e_y + z n0``."""
     lower = ops.normalize(n1 - n0 * ops.dot(n1, n0), ops.cross(n0, (0.0, 0.0, 1.0)))
     e_x = ops.normalize(v - n0 * ops.dot(v, n0), lower)
     e_y = ops.cross(n0, e_x)
     b = ops.dot(n1, e_y)
     phi = ops.atan2(ops.abs(b), ops.dot(n1, e_x))
-    return e_x, e_y, phi, ops.select(ops.lt(b, 0.0), -1.0, 1.0)
+    return e_x, e_y * ops.select(ops.lt(b, 0.0), -1.0, 1.0), phi
 
 
 def _slice_reader(ops, layout: TableLayout, xy, phi):
@@ -180,7 +181,7 @@ def _slice_reader(ops, layout: TableLayout, xy, phi):
     def read(k):
         c0, a0 = ops.table(k, xy0)
         c1, a1 = ops.table(k, xy1)
-        return c0 + (c1 - c0) * f, a0 + (a1 - a0) * f
+        return ops.mix(c0, c1, f), ops.mix(a0, a1, f)
     return read
 
 
@@ -189,9 +190,9 @@ def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, n1=
     image ``k``'s colour and alpha at ``xy``), with the Base Shader's factor in ``extras``; ``n1``:
     the lower normal (read where the layout is sliced by its azimuth)."""
     xy = table_coordinates(ops, layout, P, n0, v, d)
-    phi = side = e_x = e_y = None
+    phi = e_x = e_y = None
     if layout.sliced:
-        e_x, e_y, phi, side = view_frame(ops, n0, v, n1)
+        e_x, e_y, phi = view_frame(ops, n0, v, n1)
     read = _slice_reader(ops, layout, xy, phi)
     res = ShadingResult()
     anisotropies = {}  # image -> its four channels
@@ -204,7 +205,7 @@ def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, n1=
         normal, u = n0, tangent
         if k in layout.oriented:
             x, y, z = anisotropies[image][:3]
-            normal = ops.normalize(e_x * x + e_y * (y * side) + n0 * z, n0)
+            normal = ops.normalize(e_x * x + e_y * y + n0 * z, n0)
             u = ops.cross(normal, v)
         colour, roughness = read(k)
         res.glossy.append(Closure(name, normal, None, roughness * roughness, colour, anisotropies[image][channel],
