@@ -21,13 +21,7 @@ from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model.sphere import shading_point
 
 sys.path.insert(0, "tests")
-from test_tables import _points  # noqa: E402
-
-
-def _lower_normals(p, rng, n):
-    a = rng.uniform(0, 2 * np.pi, n)
-    t = np.radians(p.tilt)
-    return np.stack([np.sin(t) * np.cos(a), np.sin(t) * np.sin(a), np.full(n, np.cos(t))], -1)
+from test_tables import _lower_normals, _points  # noqa: E402
 
 
 def measure(name, p, seed=1):

@@ -125,6 +125,13 @@ L1_TOL_TILTED = 0.03
 FAILING_TOL_TILTED = 0.16
 
 
+def _lower_normals(p, rng, n):
+    """Lower normals of ``p``'s tilt about ``n0 = +z``, at random azimuths."""
+    azimuth = rng.uniform(0.0, 2.0 * np.pi, n)
+    t = np.radians(p.tilt)
+    return np.stack([np.sin(t) * np.cos(azimuth), np.sin(t) * np.sin(azimuth), np.full(n, np.cos(t))], -1)
+
+
 @pytest.mark.parametrize("name", list(TILTED))
 def test_tilted_tables_give_the_closures_the_program_computes(name, rng):
     p = TILTED[name]
@@ -133,9 +140,7 @@ def test_tilted_tables_give_the_closures_the_program_computes(name, rng):
     layout, texels = bake(p, plan)
     assert layout.sliced and layout.oriented and texels.nbytes <= MAX_TABLE_BYTES
     n0, v, l, d = _points(p, rng)
-    azimuth = rng.uniform(0.0, 2.0 * np.pi, len(d))
-    t = np.radians(p.tilt)
-    n1 = np.stack([np.sin(t) * np.cos(azimuth), np.sin(t) * np.sin(azimuth), np.full(len(d), np.cos(t))], -1)
+    n1 = _lower_normals(p, rng, len(d))
     pt = shading_point(p, n0, np.zeros_like(n0), view=v)
     inputs = program.program_inputs(program.clamped_inputs(pt, plan))
     computed = program.shade(pt, inputs, vec(n0), vec(n1), d, vec(v), replace(plan, tables=False))

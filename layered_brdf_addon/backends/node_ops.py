@@ -273,6 +273,17 @@ class NodeOps:
             return self._vector_greater(a, b)
         return self.math("GREATER_THAN", a, b)
 
+    def _mix_node(self, factor, a, b, kind, clamp, factor_mode="UNIFORM"):
+        """One Mix node, ``a + (b - a) factor`` of ``kind`` ("float" or "vector"), the factor clamped to [0, 1]
+        with ``clamp``; a vector's factor is a scalar ("UNIFORM") or per component ("NON_UNIFORM")."""
+        suffix = "Vector" if kind == "vector" else "Float"
+        props = dict(data_type=suffix.upper(), clamp_factor=clamp)
+        if kind == "vector":
+            props["factor_mode"] = factor_mode
+        fac = "Factor_Vector" if factor_mode == "NON_UNIFORM" else "Factor_Float"
+        n, d = self.node("ShaderNodeMix", {fac: factor, f"A_{suffix}": a, f"B_{suffix}": b}, **props)
+        return self.out(n, d, f"Result_{suffix}", kind)
+
     def select(self, c, a, b):
         if isinstance(a, Number) and isinstance(b, Number) and a == b:
             return a
@@ -280,31 +291,19 @@ class NodeOps:
             if _kind(c) != "vector":
                 return self.select_vec(c, self.broadcast(a), self.broadcast(b))
             # Per component: a Mix node with a vector factor.
-            n, d = self.node("ShaderNodeMix", {"Factor_Vector": c, "A_Vector": self.broadcast(b),
-                                               "B_Vector": self.broadcast(a)},
-                             data_type="VECTOR", factor_mode="NON_UNIFORM", clamp_factor=True)
-            return self.out(n, d, "Result_Vector", "vector")
-        n, d = self.node("ShaderNodeMix", {"Factor_Float": c, "A_Float": b, "B_Float": a}, data_type="FLOAT",
-                         clamp_factor=True)
-        return self.out(n, d, "Result_Float", "float")
+            return self._mix_node(c, self.broadcast(b), self.broadcast(a), "vector", True, "NON_UNIFORM")
+        return self._mix_node(c, b, a, "float", True)
 
     def mix(self, a, b, t):
         """``a + (b - a) t``: one Mix node (unclamped), of vectors where ``a`` or ``b`` is one."""
         if all(isinstance(x, Number) for x in (a, b, t)):
             return a + (b - a) * t
         if self._vector_args(a, b):
-            n, d = self.node("ShaderNodeMix", {"Factor_Float": t, "A_Vector": self.broadcast(a),
-                                               "B_Vector": self.broadcast(b)},
-                             data_type="VECTOR", factor_mode="UNIFORM", clamp_factor=False)
-            return self.out(n, d, "Result_Vector", "vector")
-        n, d = self.node("ShaderNodeMix", {"Factor_Float": t, "A_Float": a, "B_Float": b}, data_type="FLOAT",
-                         clamp_factor=False)
-        return self.out(n, d, "Result_Float", "float")
+            return self._mix_node(t, self.broadcast(a), self.broadcast(b), "vector", False)
+        return self._mix_node(t, a, b, "float", False)
 
     def select_vec(self, c, a, b):
-        n, d = self.node("ShaderNodeMix", {"Factor_Float": c, "A_Vector": b, "B_Vector": a}, data_type="VECTOR",
-                         factor_mode="UNIFORM", clamp_factor=True)
-        return self.out(n, d, "Result_Vector", "vector")
+        return self._mix_node(c, b, a, "vector", True)
 
     def dot(self, a, b):
         return self.vmath("DOT_PRODUCT", a, b, result="float")

@@ -70,6 +70,13 @@ def pixels_intact(image) -> bool:
     return image.get(CHECKSUM_KEY) == _checksum(_pixels(image))
 
 
+def _shared_image(readers):
+    """The image every one of ``readers`` (a table's Image Texture nodes) reads, or None (no readers, no
+    image, or readers that disagree)."""
+    images = {n.image for n in readers}
+    return images.pop() if len(images) == 1 else None
+
+
 def tables_current(group, params: LayeredParams, plan: EffectPlan, check_pixels: bool = False) -> bool:
     """Whether ``group`` reads tables baked for ``params`` and ``plan``, each image in place and stamped
     (and, with ``check_pixels``, holding the texels baked into it)."""
@@ -81,10 +88,8 @@ def tables_current(group, params: LayeredParams, plan: EffectPlan, check_pixels:
     nodes = node_group_builder.table_nodes(group)
     digest = group[DIGEST_KEY]
     for k in range(layout.images):
-        readers = nodes.get(k, [])
-        image = readers[0].image if readers else None
-        if any(n.image != image for n in readers) or \
-                not image_intact(image, digest, k, (layout.height, layout.image_width)):
+        image = _shared_image(nodes.get(k, []))
+        if not image_intact(image, digest, k, (layout.height, layout.image_width)):
             return False
         if check_pixels and not pixels_intact(image):
             return False
@@ -108,9 +113,8 @@ def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
     nodes = node_group_builder.table_nodes(group)
     for k in range(layout.images):
         readers = nodes[k]
-        image = readers[0].image
+        image = _shared_image(readers)
         if image is None or image.library is not None or image.users > len(readers) or DIGEST_KEY not in image or \
-                any(n.image != image for n in readers) or \
                 tuple(image.size) != (layout.image_width, layout.height) or not image.is_float:
             image = _new_image(f"{IMAGE_PREFIX} {digest[-8:]} {k}", layout.image_width, layout.height)
             for node in readers:

@@ -22,8 +22,8 @@ from .program import shade, tabulated_shade
 from .shading.base_shader import passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
 from .shading.surface_prelude import DEG, rotate_about
-from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT, NotTabulable,
-                             TableLayout, tabulable, unread_by_tables)
+from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT,
+                             NotTabulable, TableLayout, tabulable, unread_by_tables)
 from .shading.thin_film import harmonic_count
 
 SAMPLES_PER_FRINGE = 24  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
@@ -43,20 +43,14 @@ def _fringe_samples(params: LayeredParams, plan: EffectPlan) -> int:
     return max(math.ceil(SAMPLES_PER_FRINGE * fringes) + 1, MIN_THICKNESS_SAMPLES)
 
 
-def _most_rows(images: int, azimuths: int) -> int:
-    """The most texels along the thickness that keep ``images`` images within :data:`MAX_TABLE_BYTES`."""
-    if azimuths > 1:  # each slice repeats a column at either edge
-        return min(MAX_TABLE_BYTES // (images * azimuths * (ANGLE_SAMPLES + 2) * 16), MAX_THICKNESS_SAMPLES)
-    return min(MAX_TABLE_BYTES // (images * COS_SAMPLES * 16), MAX_THICKNESS_SAMPLES)
-
-
-def thickness_samples(params: LayeredParams, plan: EffectPlan, images: int = 1, azimuths: int = 1) -> int:
+def thickness_samples(params: LayeredParams, plan: EffectPlan, row: TableLayout) -> int:
     """Texels along the thickness: 1 for a constant one, else what its interference needs
-    (:func:`_fringe_samples`), at most what keeps ``images`` images of :data:`COS_SAMPLES` texels a row
-    (or ``azimuths`` slices of :data:`ANGLE_SAMPLES`) within :data:`MAX_TABLE_BYTES` (and :data:`MAX_THICKNESS_SAMPLES`)."""
+    (:func:`_fringe_samples`), at most what keeps the images of ``row`` (a layout of one row) within
+    :data:`MAX_TABLE_BYTES` (and :data:`MAX_THICKNESS_SAMPLES`)."""
     if plan.thickness == "constant":
         return 1
-    return int(min(_fringe_samples(params, plan), _most_rows(images, azimuths)))
+    most = min(MAX_TABLE_BYTES // (row.images * row.image_width * 16), MAX_THICKNESS_SAMPLES)
+    return int(min(_fringe_samples(params, plan), most))
 
 
 def _grid(width: int, height: int, d_min, d_max, azimuths: int = 1):
@@ -140,11 +134,11 @@ def table_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
     closures, oriented = _closures(replace(plan, tables=False))
     azimuths = AZIMUTH_SAMPLES if plan.normals == "tilted" else 1
     width = ANGLE_SAMPLES if azimuths > 1 else COS_SAMPLES
-    images = TableLayout(closures, width, 1, azimuths, oriented).images
-    height = thickness_samples(params, plan, images, azimuths)
-    if azimuths > 1 and plan.thickness != "constant" and _fringe_samples(params, plan) > height:
-        raise NotTabulable(f"plan {plan.key}: a tilted boundary's tables for {_fringe_samples(params, plan)} "
-                           f"thickness rows would exceed {MAX_TABLE_BYTES} bytes")
+    height = thickness_samples(params, plan, TableLayout(closures, width, 1, azimuths, oriented))
+    needed = 1 if plan.thickness == "constant" else _fringe_samples(params, plan)
+    if azimuths > 1 and needed > height:
+        raise NotTabulable(f"plan {plan.key}: a tilted boundary's tables for {needed} thickness rows would exceed "
+                           f"{MAX_TABLE_BYTES} bytes")
     return TableLayout(closures, width, height, azimuths, oriented)
 
 
