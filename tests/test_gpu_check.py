@@ -29,3 +29,14 @@ def test_the_comparison_finds_a_device_agrees_with_itself():
     for row in rows:
         print(row["preset"], row["summary"])
         assert row["ok"] and row["failing"] == 0.0, row
+
+
+def test_a_device_type_asked_for_and_not_found_is_an_error(tmp_path, monkeypatch, capsys):
+    """Cycles would render such a scene on the CPU: the check would compare the CPU with itself."""
+    monkeypatch.setattr(gpu_check, "device_types", lambda: {"CUDA": ["a card"]})
+    out = tmp_path / "gpu.json"
+    with pytest.raises(SystemExit) as e:
+        gpu_check.main(["--devices", "OPTIX", "--out", str(out)])
+    assert e.value.code == 2
+    assert "--devices: no OPTIX device found (found: CUDA)" in capsys.readouterr().err
+    assert not out.exists()
