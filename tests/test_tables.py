@@ -163,3 +163,21 @@ def test_a_boundary_that_follows_the_thickness_is_not_tabulated():
     p = preset("fig5_correlated")
     with pytest.raises(NotTabulable):
         table_layout(p, replace(plan_effects(p), tables=True))
+
+
+@pytest.mark.parametrize("name, images", [("anodised_titanium", 5), ("fig6_medium", 7), ("oil_slick", 4)])
+def test_one_channel_closures_are_packed_four_values_to_an_image(name, images):
+    """A dispersive plan's per-channel closures share images with the anisotropies and the baked normals
+    (a read less for each four values); a closure weighing three channels keeps an image of its own."""
+    p = preset(name)
+    layout = table_layout(p, plan_effects(p))
+    slots = [layout.slot(k, what) for k, what in layout.packed_values]
+    assert len(set(slots)) == len(slots)  # every value has a channel of its own
+    assert all(layout.diffuse_image < image < layout.images for image, _ in slots)
+    own = [k for k, (_, channels) in enumerate(layout.closures) if len(channels) > 1]
+    assert sorted(layout.closure_image(k) for k in own) == list(range(len(own)))
+    assert layout.images == images
+    _, texels = bake(p, plan_effects(p))
+    assert texels.shape[0] == images
+    used = {image for image, _ in slots}
+    assert used == set(range(layout.diffuse_image + 1, layout.images))  # no image packed empty

@@ -265,7 +265,7 @@ def table_readers_intact(group, layout) -> bool:
 
 
 def layout_record(layout) -> str:
-    record = f"{layout.closures}:{layout.width}x{layout.height}"
+    record = f"format {tables_module.TABLE_FORMAT}:{layout.closures}:{layout.width}x{layout.height}"
     return record + f":{layout.azimuths} azimuths {layout.oriented}" if layout.sliced else record
 
 

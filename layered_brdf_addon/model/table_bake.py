@@ -162,17 +162,27 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
     res, base, n0 = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
     shape = (layout.azimuths, layout.height, layout.width)
     out = np.zeros((layout.images, *shape, 4), dtype=np.float32)
+    def put(k, what, x):
+        image, channel = layout.slot(k, what)
+        out[image, ..., channel] = _plane(x, shape)
+
     for k, cl in enumerate(res.glossy):
-        image, channel = layout.anisotropy_slot(k)
         if k in layout.oriented:
-            for c, a in enumerate(ops_numpy.components(cl.normal)):
-                out[image, ..., c] = _plane(a, shape)
+            for what, a in zip(("normal_x", "normal_y", "normal_z"), ops_numpy.components(cl.normal)):
+                put(k, what, a)
         elif _off_normal(cl.normal) > PARALLEL_TOLERANCE:
             raise NotTabulable(f"closure {cl.name} does not lie about the upper normal")
-        for c in range(3):
-            out[k, ..., c] = _plane(cl.weight[c], shape)
-        out[k, ..., 3] = np.sqrt(np.clip(_plane(cl.alpha, shape), 0.0, 1.0))
-        out[image, ..., channel] = _plane(cl.anisotropy, shape)
+        roughness = np.sqrt(np.clip(_plane(cl.alpha, shape), 0.0, 1.0))
+        if layout.has_image(k):
+            image = layout.closure_image(k)
+            for c in range(3):
+                out[image, ..., c] = _plane(cl.weight[c], shape)
+            out[image, ..., 3] = roughness
+        else:
+            for channel in layout.closures[k][1]:  # its one channel (none: a weight of zero)
+                put(k, "weight", cl.weight[channel])
+            put(k, "roughness", roughness)
+        put(k, "anisotropy", cl.anisotropy)
     if res.diffuse is not None:
         for c in range(3):
             out[layout.diffuse_image, ..., c] = _plane(res.diffuse[c], shape)

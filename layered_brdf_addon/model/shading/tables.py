@@ -9,16 +9,18 @@ float images over ``(cos_v, d)``, which the shader reads with one Image Texture 
 (cubic B-spline interpolation of prefiltered coefficients, extended at the edges), whatever the
 accuracy mode or optics.
 
-The images (:class:`TableLayout`): one per glossy closure (colour: its weight per channel;
-alpha: the Glossy BSDF's Roughness, ``sqrt(alpha)``), one for the diffuse colour and the Base
-Shader's factor, and the closures' anisotropies four to an image.  Texel ``(i, j)`` holds the
+The images (:class:`TableLayout`): one per glossy closure that weighs more than one channel
+(colour: its weight per channel; alpha: the Glossy BSDF's Roughness, ``sqrt(alpha)``), one for the
+diffuse colour and the Base Shader's factor, and the closures' other values four to an image (the
+anisotropies, and a dispersive plan's one-channel closures' weights and roughnesses: a read less
+for each four values).  Texel ``(i, j)`` holds the
 values at ``cos_v = (i / (W - 1))^2`` (denser towards grazing views) and ``d = d_min + (d_max -
 d_min) j / (H - 1)``; a lookup puts ``cos_v = 0`` and ``1`` on the first and last texels' centres.
 
 A tilted lower boundary (a constant tilt ``tau``) adds a third per-point scalar: the azimuth ``phi`` of
 the lower normal about ``n0``, from the view's plane.  Its transmitted closures no longer lie about
 ``n0``, so their normals are baked too, in the frame of the view (``e_x`` along the view's tangential
-part, ``e_y = n0 x e_x``), with their anisotropies in the same image.  The view's plane is a mirror of
+part, ``e_y = n0 x e_x``), packed with the other values.  The view's plane is a mirror of
 the geometry, so ``phi`` runs over ``[0, pi]`` (:data:`AZIMUTH_SAMPLES` slices), and a point with the
 lower normal on the other side reads its slice with ``e_y`` turned over.  Near normal view these
 closures turn with the view about ``n0``, so a slice's texels run along the view's angle ``theta_v``
@@ -36,8 +38,8 @@ from ..plan import EffectPlan
 from .base_shader import base_receives_light
 from .closures import Closure, ShadingResult
 
-TABLE_FORMAT = 2  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
-# images); baked tables of another format are rebaked
+TABLE_FORMAT = 3  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
+# images; 3: one-channel closures' values packed); baked tables of another format are rebaked
 COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured: docs/tables.md)
 # A tilted boundary's tables (measured: docs/tables.md#a-tilted-boundary): slices over the lower normal's
 # azimuth from the view's plane (0..pi), and texels along the view's angle in each.
@@ -82,7 +84,12 @@ class TableLayout:
     its weight has (a dispersive plan's per-channel closures weigh one channel);
     ``width``, ``height``: texels along ``cos_v`` and ``d`` (1 for a constant thickness);
     ``azimuths``: slices over the lower normal's azimuth (1: parallel boundaries, no slices);
-    ``oriented``: the closures whose normals are baked (those that do not lie about ``n0``)."""
+    ``oriented``: the closures whose normals are baked (those that do not lie about ``n0``).
+
+    A closure that weighs two or three channels has an image of its own (colour: the weight, alpha:
+    the roughness); what every other value of the closures is (a one-channel closure's weight and
+    roughness, each closure's anisotropy, an oriented closure's normal) is packed, closure after
+    closure, four to an image, in the images after the diffuse one (:meth:`slot`)."""
 
     closures: tuple[tuple[str, tuple[int, ...]], ...]
     width: int
@@ -90,23 +97,51 @@ class TableLayout:
     azimuths: int = 1
     oriented: tuple[int, ...] = ()
 
-    @property
-    def closure_images(self) -> int:
-        return len(self.closures)
+    def has_image(self, k: int) -> bool:
+        """Whether closure ``k`` has an image of its own (it weighs more than one channel)."""
+        return len(self.closures[k][1]) > 1
 
     @property
-    def anisotropy_images(self) -> int:
-        return (len(self.closures) - len(self.oriented) + 3) // 4
+    def closure_images(self) -> int:
+        return sum(1 for k in range(len(self.closures)) if self.has_image(k))
+
+    @property
+    def packed_values(self) -> tuple[tuple[int, str], ...]:
+        """The values packed four to an image, in order: ``(closure, what)``, ``what`` one of "weight",
+        "roughness" (one-channel closures), "anisotropy", "normal_x", "normal_y", "normal_z" (oriented)."""
+        out = []
+        for k in range(len(self.closures)):
+            if not self.has_image(k):
+                out += [(k, "weight"), (k, "roughness")]
+            out.append((k, "anisotropy"))
+            if k in self.oriented:
+                out += [(k, "normal_x"), (k, "normal_y"), (k, "normal_z")]
+        return tuple(out)
+
+    @property
+    def packed_images(self) -> int:
+        return (len(self.packed_values) + 3) // 4
 
     @property
     def images(self) -> int:
-        """Images in all: the closures', the diffuse colour's (with the Base Shader's factor), the
-        anisotropies', the baked normals' (one per oriented closure, with its anisotropy)."""
-        return self.closure_images + 1 + self.anisotropy_images + len(self.oriented)
+        """Images in all: the closures' own, the diffuse colour's (with the Base Shader's factor), the
+        packed values'."""
+        return self.closure_images + 1 + self.packed_images
 
     @property
     def diffuse_image(self) -> int:
         return self.closure_images
+
+    def closure_image(self, k: int) -> int:
+        """The image of closure ``k``'s weight (colour) and roughness (alpha); it must have one."""
+        if not self.has_image(k):
+            raise ValueError(f"closure {k} weighs one channel: its values are packed (slot)")
+        return sum(1 for i in range(k) if self.has_image(i))
+
+    def slot(self, k: int, what: str) -> tuple[int, int]:
+        """(image, channel) of closure ``k``'s packed value ``what`` (:attr:`packed_values`)."""
+        i = self.packed_values.index((k, what))
+        return self.closure_images + 1 + i // 4, i % 4
 
     @property
     def sliced(self) -> bool:
@@ -121,17 +156,6 @@ class TableLayout:
     def image_width(self) -> int:
         """Columns of each image."""
         return self.azimuths * self.block_width
-
-    def normal_image(self, k: int) -> int:
-        """The image of oriented closure ``k``'s normal (colour, in the view's frame) and anisotropy (alpha)."""
-        return self.closure_images + 1 + self.anisotropy_images + self.oriented.index(k)
-
-    def anisotropy_slot(self, k: int) -> tuple[int, int]:
-        """(image, channel) of closure ``k``'s anisotropy."""
-        if k in self.oriented:
-            return self.normal_image(k), 3
-        j = sum(1 for i in range(k) if i not in self.oriented)
-        return self.closure_images + 1 + j // 4, j % 4
 
 
 def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
@@ -195,20 +219,28 @@ def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, n1=
         e_x, e_y, phi = view_frame(ops, n0, v, n1)
     read = _slice_reader(ops, layout, xy, phi)
     res = ShadingResult()
-    anisotropies = {}  # image -> its four channels
-    tangent = ops.cross(n0, v)
-    for k, (name, _) in enumerate(layout.closures):
-        image, channel = layout.anisotropy_slot(k)
-        if image not in anisotropies:
+    packed = {}  # image -> its four channels
+
+    def value(k, what):
+        image, channel = layout.slot(k, what)
+        if image not in packed:
             colour, alpha = read(image)
-            anisotropies[image] = [*ops.components(colour), alpha]
+            packed[image] = [*ops.components(colour), alpha]
+        return packed[image][channel]
+
+    tangent = ops.cross(n0, v)
+    for k, (name, channels) in enumerate(layout.closures):
         normal, u = n0, tangent
         if k in layout.oriented:
-            x, y, z = anisotropies[image][:3]
+            x, y, z = (value(k, what) for what in ("normal_x", "normal_y", "normal_z"))
             normal = ops.normalize(e_x * x + e_y * y + n0 * z, n0)
             u = ops.cross(normal, v)
-        colour, roughness = read(k)
-        res.glossy.append(Closure(name, normal, None, roughness * roughness, colour, anisotropies[image][channel],
+        if layout.has_image(k):
+            colour, roughness = read(layout.closure_image(k))
+        else:  # one channel: its weight placed in that channel
+            w, roughness = value(k, "weight"), value(k, "roughness")
+            colour = ops.combine(*(w if c in channels else 0.0 for c in range(3)))
+        res.glossy.append(Closure(name, normal, None, roughness * roughness, colour, value(k, "anisotropy"),
                                   u, roughness))
     # The diffuse colour and the Base Shader's factor do not depend on the lower normal: every slice holds
     # them, and the first is read.
