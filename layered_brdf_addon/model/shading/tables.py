@@ -87,9 +87,9 @@ class TableLayout:
     ``oriented``: the closures whose normals are baked (those that do not lie about ``n0``).
 
     A closure that weighs two or three channels has an image of its own (colour: the weight, alpha:
-    the roughness); what every other value of the closures is (a one-channel closure's weight and
-    roughness, each closure's anisotropy, an oriented closure's normal) is packed, closure after
-    closure, four to an image, in the images after the diffuse one (:meth:`slot`)."""
+    the roughness); every other value of the closures (a one-channel closure's weight and roughness,
+    each closure's anisotropy, an oriented closure's normal) is packed, closure after closure, four to
+    an image, in the images after the diffuse one (:meth:`slot`)."""
 
     closures: tuple[tuple[str, tuple[int, ...]], ...]
     width: int
