@@ -162,6 +162,7 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
     res, base, n0 = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
     shape = (layout.azimuths, layout.height, layout.width)
     out = np.zeros((layout.images, *shape, 4), dtype=np.float32)
+
     def put(k, what, x):
         image, channel = layout.slot(k, what)
         out[image, ..., channel] = _plane(x, shape)
