@@ -269,7 +269,7 @@ def table(d: dict) -> str:
         p = r["per_sample"]
         flag = "" if r["magenta"] < MAGENTA_FAILED else " (magenta)"
         lines.append(f"| {r['preset'] or r['label']}{flag} | {r['backend']} | {r['accuracy'] or ''} | "
-                     f"{r.get('optics') or ''} | {r['nodes'] if r['nodes'] is not None else ''} | "
+                     f"{r.get('optics') or ''} | {_nodes_cell(r)} | "
                      f"{1e3 * p['min']:.0f} / {1e3 * p['median']:.0f} / {1e3 * p['max']:.0f} | "
                      f"{r['vs_reference']:.2f} | {_cell(r.get('bake_ms'), '{:.1f}')} | "
                      f"{_cell(r.get('table_bytes') and r['table_bytes'] / 1024, '{:.0f}')} | "
@@ -295,6 +295,14 @@ def table(d: dict) -> str:
 
 def _cell(value, fmt: str) -> str:
     return "" if value is None else fmt.format(value)
+
+
+def _nodes_cell(r: dict) -> str:
+    """Nodes interpreted, and of those the nodes Cycles cannot fold (records of older runs have no such count)."""
+    if r["nodes"] is None:
+        return ""
+    per_point = r.get("per_point_nodes")
+    return f"{r['nodes']}" + ("" if per_point is None else f" ({per_point} per point)")
 
 
 def write_json(d: dict, path: Path = OUT_JSON) -> None:

@@ -1,13 +1,13 @@
 """The materials the scene benchmark measures (benchmarks/bench_scene.py): Blender's BSDFs, the
 closures of a layered material alone, and the layered material of each preset as the node group
-reading its baked tables, the node group computing its closures, or the OSL shader; and how many
-nodes a group makes Cycles interpret.
+reading its baked tables, the node group computing its closures, or the OSL shader.
 """
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
 
+from node_count import interpreted_nodes, per_point_nodes
 from timing import DIFFUSE, GLOSSY, PRINCIPLED, stock_material, thin_film_inputs
 
 REFERENCE = "Principled BSDF + Thin Film"
@@ -27,6 +27,7 @@ class Variant:
     material: object = field(default=None, repr=False)
     optics: str | None = None
     nodes: int | None = None  # nodes the layered node group interprets
+    per_point: int | None = None  # of those, the nodes Cycles cannot fold (they depend on the shading point)
     bake_ms: float | None = None  # a bake of the material's tables (tables variants)
     table_bytes: int | None = None  # the tables' texels in memory
     rebuild_ms: float | None = None  # OSL reading tables: a bake, the text written and compiled
@@ -37,7 +38,7 @@ class Variant:
 
     def record(self) -> dict:
         return dict(label=self.label, backend=self.backend, preset=self.preset, accuracy=self.accuracy,
-                    nodes=self.nodes, optics=self.optics, bake_ms=self.bake_ms, table_bytes=self.table_bytes,
+                    nodes=self.nodes, per_point_nodes=self.per_point, optics=self.optics, bake_ms=self.bake_ms, table_bytes=self.table_bytes,
                     rebuild_ms=self.rebuild_ms)
 
 
@@ -151,6 +152,7 @@ def layered_variant(obj, preset_name: str, backend: str, accuracy: str, optics: 
     v = Variant(label, backend, preset_name, accuracy, mat, optics=params.optics)
     if shader == "nodes":
         v.nodes = interpreted_nodes(mat.node_tree)
+        v.per_point = per_point_nodes(mat.node_tree)
     if evaluation == "tables":
         v.bake_ms, v.table_bytes = bake_cost(params)
     if backend == "osl-tables" and v.bake_ms is not None:
@@ -209,33 +211,3 @@ def layered_variants(obj, presets, backends, spectral_preset, spectral_modes, pa
     if spectral_preset not in presets:
         combos += [(spectral_preset, b, own) for b in backends if own in spectral_modes]
     return [layered_variant(obj, *c) for c in combos]
-
-
-SKIPPED_NODES = {"NodeGroupInput", "NodeGroupOutput", "NodeReroute", "NodeFrame"}
-
-
-OUTPUT_NODES = {"ShaderNodeOutputMaterial", "ShaderNodeOutputAOV", "NodeGroupOutput"}
-
-
-def interpreted_nodes(tree) -> int:
-    """Nodes Cycles/EEVEE evaluate in ``tree``: those an output depends on (a node nothing reads is
-    never compiled), nested groups expanded (each use counts, the part of the group its used outputs
-    need), group input/output, reroute and frame nodes left out.  The material's own output and
-    AOV nodes count, as in any material."""
-    outputs = [n for n in tree.nodes if n.bl_idname in OUTPUT_NODES]
-    seen, stack = set(), list(outputs)
-    while stack:
-        node = stack.pop()
-        if node.as_pointer() in seen:
-            continue
-        seen.add(node.as_pointer())
-        stack += [link.from_node for sock in node.inputs for link in sock.links if not link.is_muted]
-    n = 0
-    for node in tree.nodes:
-        if node.as_pointer() not in seen or node.bl_idname in SKIPPED_NODES:
-            continue
-        if node.bl_idname == "ShaderNodeGroup":
-            n += interpreted_nodes(node.node_tree) if node.node_tree is not None else 0
-        else:
-            n += 1
-    return n

@@ -326,6 +326,15 @@ class NodeOps:
         ok = self.gt(self.dot(v, v), 1e-20)
         return self.select_vec(ok, self.vmath("NORMALIZE", v), fallback)
 
+    def unit(self, v):
+        """``v / |v|``: one Normalize node (zero for a zero ``v``)."""
+        return self.vmath("NORMALIZE", v)
+
+    def closure_normal(self, v, fallback):
+        """A closure's Normal: ``v`` as it is, since the BSDF nodes normalise their Normal themselves (Cycles
+        falls back to the shading normal where it is zero, EEVEE normalises it safely)."""
+        return v
+
     def after(self, state, x):
         """``x``, made to wait for every value of ``state``: ``max(x, x - sum |s|)`` is ``x``, but
         Cycles cannot see it, so it evaluates what depends on ``x`` after the whole state and
@@ -356,6 +365,11 @@ class NodeOps:
         if isinstance(x, Number):
             return float(math.floor(x))
         return self.math("FLOOR", x)
+
+    def sign(self, x):
+        if isinstance(x, Number):
+            return float((x > 0) - (x < 0))
+        return self.math("SIGN", x)
 
     def nan_to_zero(self, x):
         """``x``, or 0 where it is NaN: ``Maximum(0, x) + Minimum(0, x)`` (see clamp_input)."""

@@ -202,6 +202,13 @@ class OslOps:
         """Unit ``v``; ``fallback`` for a zero-length or non-finite ``v``."""
         return self.call_expr("safe_normalize_or", (v, fallback), "vector")
 
+    def unit(self, v):
+        """``v / |v|`` (OSL's normalize: zero for a zero ``v``)."""
+        return self.call_expr("normalize", (v,), "vector")
+
+    def closure_normal(self, v, fallback):
+        return self.normalize(v, fallback)
+
     def after(self, state, x):
         return x  # OSL runs statements in order: nothing to schedule
 
@@ -216,6 +223,9 @@ class OslOps:
 
     def floor(self, x):
         return self._unary("floor", x, lambda a: float(math.floor(a)))
+
+    def sign(self, x):
+        return self._unary("sign", x, lambda a: float((a > 0) - (a < 0)))
 
     def nan_to_zero(self, x):
         return self.call_expr("nan_to_zero", (x,), "float")

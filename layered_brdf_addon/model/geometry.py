@@ -57,10 +57,10 @@ def tilted_normal(n0: np.ndarray, tilt_deg, azimuth_deg=0.0, up=Z_AXIS, fallback
     ``n0`` rotated by ``tilt`` about the tilt axis ``normalize(cross(up, n0))`` (``fallback``
     where the cross product vanishes), the axis turned about ``n0`` by ``azimuth``.
     """
-    n1 = surface_prelude.tilted_normal(ops_numpy, ops_numpy.vec(n0), np.asarray(tilt_deg, dtype=float),
-                                       np.asarray(azimuth_deg, dtype=float), tuple(map(float, up)),
-                                       tuple(map(float, fallback)))
-    return np.asarray(n1)
+    n0 = ops_numpy.vec(n0)
+    t = surface_prelude.tilt_axis_about(ops_numpy, n0, np.asarray(azimuth_deg, dtype=float),
+                                        tuple(map(float, up)), tuple(map(float, fallback)))
+    return np.asarray(surface_prelude.tilted_normal(ops_numpy, n0, t, np.asarray(tilt_deg, dtype=float)))
 
 
 def correlated_normal(n0: np.ndarray, grad_d: np.ndarray, strength) -> np.ndarray:

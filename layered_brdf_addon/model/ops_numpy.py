@@ -353,6 +353,16 @@ def nan_to_zero(x):
 
 
 
+def unit(v):
+    """``v / |v|``, zero for a zero ``v`` (Blender's Normalize)."""
+    return normalize(v, (0.0, 0.0, 0.0))
+
+
+def closure_normal(v, fallback):
+    """A closure's normal, unit (the renderer's BSDFs normalise theirs)."""
+    return normalize(v, fallback)
+
+
 def components(v):
     v = _plain(v)
     return v[..., 0], v[..., 1], v[..., 2]
@@ -366,6 +376,11 @@ def abs(x):  # noqa: A001 - the ops interface's name
 @_elementwise
 def floor(x):
     return np.floor(x)
+
+
+@_elementwise
+def sign(x):
+    return np.sign(x)
 
 
 def triple(x, y, z):

@@ -54,9 +54,9 @@ from .shading.spectral_mode import merged_group_weights, shade_spectral, spectra
 from .shading.step import shader_function
 from .shading.tables import TableLayout, tabulated_shade
 from .shading.surface_prelude import (DEG, D_LIMIT, GRADIENT_STEP, correlated_normal, layer_thickness, lower_normal,
-                                      pattern_inputs, pattern_thickness, rotate_about, tangent_axis, thickness_at,
-                                      thickness_factor,
-                                      thickness_gradient, tilted_normal)
+                                      pattern_inputs, pattern_thickness, tangent_axis, thickness_at,
+                                      thickness_factor, thickness_gradient, tilt_axis, tilt_axis_about,
+                                      tilted_normal)
 from .shading.thin_film import (HARMONICS_MULTIBEAM, beam_sums, c_abs2, c_div, c_mul, c_sqrt, film_beams,
                                 fresnel_reflectance, harmonic_count, lower_amplitudes, optics_settings, top_amplitudes)
 from .shading.values import channels, gather, spread
@@ -72,8 +72,8 @@ __all__ = [
     "film_amplitudes", "film_diffuse_rho", "lobe_amplitudes", "LOBE_PLACEMENT", "channel_block", "channel_lobes",
     "diffuse_colour", "merged_group_weights", "shade_spectral", "spectral_groups", "spectral_step", "DEG",
     "D_LIMIT", "GRADIENT_STEP", "correlated_normal", "layer_thickness", "lower_normal", "pattern_inputs",
-    "pattern_thickness", "rotate_about", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient",
-    "tilted_normal",
+    "pattern_thickness", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient",
+    "tilt_axis", "tilt_axis_about", "tilted_normal",
     "FLOAT_LIMIT", "clamped_inputs", "direction_input", "program_inputs", "CLEAR_K", "base_weight",
     "film_transmittance", "passed_to_base", "TableLayout", "tabulated_shade", "shade", "layered_surface",
 ]
@@ -140,11 +140,12 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None) ->
         pattern = pattern_thickness(ops, P, p_obj, plan)
         d = layer_thickness(ops, P, p_obj, plan, pattern)
     with ops.stage("Lower boundary normal n1: parallel, tilted or following d"):
-        n1 = lower_normal(ops, P, n0, p_obj, d, plan, pattern)
+        axis = tilt_axis(ops, P, n0) if plan.normals == "tilted" else None
+        n1 = lower_normal(ops, P, n0, p_obj, d, plan, pattern, axis)
     if plan.tables:
         with ops.stage("Lobes and interference from the material's baked tables: the view's angle, d "
-                       "(and the lower normal's azimuth)"):
-            res = tabulated_shade(ops, plan, layout, P, n0, v, d, n1)
+                       "(and the view's azimuth from the lower normal)"):
+            res = tabulated_shade(ops, plan, layout, P, n0, v, d, axis)
     else:
         with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
             inputs = program_inputs(P)

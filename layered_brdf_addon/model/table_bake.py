@@ -21,7 +21,7 @@ from .plan import EffectPlan
 from .program import shade, tabulated_shade
 from .shading.base_shader import passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
-from .shading.surface_prelude import DEG, rotate_about
+from .shading.surface_prelude import tilted_normal
 from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT,
                              NotTabulable, TableLayout, tabulable, unread_by_tables)
 from .shading.thin_film import harmonic_count
@@ -54,9 +54,9 @@ def thickness_samples(params: LayeredParams, plan: EffectPlan, row: TableLayout)
 
 
 def _grid(width: int, height: int, d_min, d_max, azimuths: int = 1):
-    """View directions, thicknesses and lower normals' azimuths (from the view's plane) of the texels,
-    (A, H, W): n0 = +z, the view in the xz plane towards +x, at ``sqrt(cos_v) = i / (W - 1)`` (with
-    azimuths, at the angle ``pi/2 (1 - i / (W - 1))``)."""
+    """View directions, thicknesses and lower normals' azimuths (from the view's plane: the view's azimuth
+    from the lower normal, turned over) of the texels, (A, H, W): n0 = +z, the view in the xz plane towards
+    +x, at ``sqrt(cos_v) = i / (W - 1)`` (with azimuths, at the angle ``pi/2 (1 - i / (W - 1))``)."""
     c = np.cos((1.0 - np.linspace(0.0, 1.0, width)) * (0.5 * math.pi)) if azimuths > 1 else \
         np.linspace(0.0, 1.0, width) ** 2
     t = np.linspace(0.0, 1.0, height) if height > 1 else np.zeros(1)
@@ -83,8 +83,10 @@ def _arithmetic(plan: EffectPlan) -> EffectPlan:
 
 def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int, azimuths: int = 1):
     """The program's closures at the texels (:func:`_grid`, shape (A, H, W)), the Base Shader's factor, and
-    the upper normal; a tilted boundary's lower normal is ``n0`` tilted by the material's tilt towards each
-    texel's azimuth."""
+    the frame a tilted boundary's closure normals are baked in (:func:`.shading.tables.lower_frame`: ``w``,
+    ``b``, ``n0``); its lower normal is ``n0`` tilted by the material's tilt towards each texel's azimuth,
+    about the axis ``t = (-sin phi, cos phi, 0)``, so that ``w = t x n0 = (cos phi, sin phi, 0)`` and, the
+    view lying on the side of ``-t``, ``b = -t``."""
     plan = _arithmetic(plan)
     values = held_values(params, ShadingPoint.SOCKETS)
     n0 = np.zeros((azimuths, height, width, 3))
@@ -95,17 +97,21 @@ def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int
     inputs = program_inputs(P)
     n0v, vv = ops_numpy.vec(n0), ops_numpy.vec(v)
     n1v = n0v
+    zero = np.zeros_like(phi)
+    frame = (np.stack([np.cos(phi), np.sin(phi), zero], axis=-1), np.stack([np.sin(phi), -np.cos(phi), zero], axis=-1),
+             n0)
     if plan.normals == "tilted":
-        axis = ops_numpy.vec(np.stack([-np.sin(phi), np.cos(phi), np.zeros_like(phi)], axis=-1))
-        n1v = rotate_about(pt, n0v, axis, float(P["tilt"]) * DEG)
+        axis = ops_numpy.vec(np.stack([-np.sin(phi), np.cos(phi), zero], axis=-1))
+        n1v = tilted_normal(pt, n0v, axis, float(P["tilt"]))
     res = shade(pt, inputs, n0v, n1v, d, vv, plan, WAVELENGTHS_NM)
-    return res, passed_to_base(pt, plan, inputs, vv, n0v), n0
+    return res, passed_to_base(pt, plan, inputs, vv, n0v), frame
 
 
 def _is_zero(x) -> bool:
     return isinstance(x, float) and x == 0.0
 
 
+MIN_NORMAL_COS = 1.0e-3  # a baked closure normal's component along n0, at least (its others are over it)
 PROBE_TILT = 10.0  # degrees: the tilt at which a plan's closures are probed for normals off n0
 
 
@@ -159,7 +165,7 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
     """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, H, image_width, 4),
     a tilted boundary's azimuth slices side by side, each with its edge columns repeated."""
     layout = table_layout(params, plan)
-    res, base, n0 = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
+    res, base, frame = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
     shape = (layout.azimuths, layout.height, layout.width)
     out = np.zeros((layout.images, *shape, 4), dtype=np.float32)
 
@@ -169,8 +175,11 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
 
     for k, cl in enumerate(res.glossy):
         if k in layout.oriented:
-            for what, a in zip(("normal_x", "normal_y", "normal_z"), ops_numpy.components(cl.normal)):
-                put(k, what, a)
+            normal = np.stack([_plane(a, shape) for a in ops_numpy.components(cl.normal)], axis=-1)
+            w, b, n0 = (np.einsum("...k,...k->...", normal, axis) for axis in frame)
+            n0 = np.maximum(n0, MIN_NORMAL_COS)
+            put(k, "normal_x", w / n0)
+            put(k, "normal_y", b / n0)
         elif _off_normal(cl.normal) > PARALLEL_TOLERANCE:
             raise NotTabulable(f"closure {cl.name} does not lie about the upper normal")
         roughness = np.sqrt(np.clip(_plane(cl.alpha, shape), 0.0, 1.0))
@@ -257,15 +266,16 @@ def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
 
 
 def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayout, texels: np.ndarray, n0, v, d,
-                     n1=None):
+                     axis=None):
     """What the group reading these tables returns at points of upper normal ``n0``, view ``v``, thickness
-    ``d`` and lower normal ``n1`` (numpy arrays; ``n1`` where the layout is sliced): the program's tabulated
+    ``d`` and tilt axis ``axis`` (numpy arrays; ``axis`` where the layout is sliced: unit, across ``n0``,
+    :func:`.shading.surface_prelude.tilt_axis`): the program's tabulated
     step on numpy, reading ``texels`` (a bake's) as Cycles' Image Texture reads the images the group holds
     (:func:`spline_coefficients`, :func:`.ops_numpy.table_lookup`)."""
     n0 = np.asarray(n0, dtype=float)
     pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0),
                       tables=spline_coefficients(texels, layout))
     P = clamped_inputs(pt, plan)
-    lower = None if n1 is None else ops_numpy.vec(np.asarray(n1, dtype=float))
+    t = None if axis is None else ops_numpy.vec(np.asarray(axis, dtype=float))
     return tabulated_shade(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), pt.incoming(),
-                           np.asarray(d, dtype=float), lower)
+                           np.asarray(d, dtype=float), t)

@@ -16,29 +16,30 @@ D_LIMIT = 1.0e6  # largest thickness (nm): the range of d_min and d_max
 
 
 @shader_function
-def rotate_about(ops, a, axis, angle):
-    """Rotate ``a`` about the unit ``axis`` by ``angle`` radians (Rodrigues)."""
-    c = ops.cos(angle)
-    s = ops.sin(angle)
-    return a * c + ops.cross(axis, a) * s + axis * (ops.dot(axis, a) * (1.0 - c))
-
-
-@shader_function
 def tangent_axis(ops, n0, up, fallback):
     """Tilt axis ``normalize(cross(up, n0))``; at the poles, where n0 is along ``up`` and the
     cross product vanishes (length below 1e-4), ``fallback``."""
     c = ops.cross(up, n0)
-    return ops.select_vec(ops.lt(ops.length(c), 1e-4), fallback, ops.normalize(c, fallback))
+    return ops.select_vec(ops.lt(ops.length(c), 1e-4), fallback, ops.unit(c))
 
 
 @shader_function
-def tilted_normal(ops, n0, tilt_deg, azimuth_deg, up, fallback):
-    """Lower normal of a constant tilt: ``n0`` rotated by ``tilt_deg`` about the tilt axis,
-    the axis first turned about ``n0`` by ``azimuth_deg``.  Any tilt up to 180 degrees is
-    valid: at 90 or 180 degrees no path crosses the layer (eq. 11)."""
+def tilt_axis_about(ops, n0, azimuth_deg, up, fallback):
+    """The axis a constant tilt turns ``n0`` about: :func:`tangent_axis` turned about ``n0`` by
+    ``azimuth_deg`` (Rodrigues, for an axis across ``n0``: ``t cos a + (n0 x t) sin a``).  A unit
+    vector across ``n0``; ``cross(t, n0)`` is the lower normal's direction along the surface."""
     t = tangent_axis(ops, n0, up, fallback)
-    t = rotate_about(ops, t, n0, azimuth_deg * DEG)
-    return ops.normalize(rotate_about(ops, n0, t, tilt_deg * DEG), n0)
+    a = azimuth_deg * DEG
+    return t * ops.cos(a) + ops.cross(n0, t) * ops.sin(a)
+
+
+@shader_function
+def tilted_normal(ops, n0, t, tilt_deg):
+    """Lower normal of a constant tilt: ``n0`` rotated by ``tilt_deg`` about the axis ``t``
+    (:func:`tilt_axis_about`, across ``n0``): ``n0 cos(tilt) + (t x n0) sin(tilt)``.  Any tilt up to
+    180 degrees is valid: at 90 or 180 degrees no path crosses the layer (eq. 11)."""
+    a = tilt_deg * DEG
+    return ops.normalize(n0 * ops.cos(a) + ops.cross(t, n0) * ops.sin(a), n0)
 
 
 @shader_function
@@ -118,15 +119,20 @@ def layer_thickness(ops, P, p_obj, plan: EffectPlan, pattern=None):
     return linked_thickness(ops, ops.input(THICKNESS_SOCKET), pattern)
 
 
-def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan, pattern=None):
+def tilt_axis(ops, P, n0):
+    """The axis a tilted lower boundary turns ``n0`` about at this point (:func:`tilt_axis_about`), from
+    the object's axes in world space: the tilt sticks to the object."""
+    up = ops.unit(ops.object_to_world((0.0, 0.0, 1.0)))
+    x_axis = ops.unit(ops.object_to_world((1.0, 0.0, 0.0)))
+    return tilt_axis_about(ops, n0, P["tilt_azimuth"], up, x_axis)
+
+
+def lower_normal(ops, P, n0, p_obj, d, plan: EffectPlan, pattern=None, axis=None):
     """Lower boundary normal ``n1`` (world space) at a point of upper normal ``n0``; ``d`` the
     thickness, ``pattern`` the plan's pattern there (its gradient is the pattern's own: ``d`` where
-    not given)."""
+    not given); ``axis``: a tilted boundary's :func:`tilt_axis` (computed where not given)."""
     if plan.normals == "tilted":
-        # The object's axes in world space: the tilt sticks to the object.
-        up = ops.normalize(ops.object_to_world((0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
-        x_axis = ops.normalize(ops.object_to_world((1.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
-        return tilted_normal(ops, n0, P["tilt"], P["tilt_azimuth"], up, x_axis)
+        return tilted_normal(ops, n0, tilt_axis(ops, P, n0) if axis is None else axis, P["tilt"])
     if plan.normals == "correlated" and plan.thickness == "input":
         # The gradient of a linked thickness is the renderer's: Blender's Bump node on it.
         return ops.bump_normal(n0, d, P["bump_strength"])

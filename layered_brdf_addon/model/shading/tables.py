@@ -18,16 +18,18 @@ values at ``cos_v = (i / (W - 1))^2`` (denser towards grazing views) and ``d = d
 d_min) j / (H - 1)``; a lookup puts ``cos_v = 0`` and ``1`` on the first and last texels' centres.
 
 A tilted lower boundary (a constant tilt ``tau``) adds a third per-point scalar: the azimuth ``phi`` of
-the lower normal about ``n0``, from the view's plane.  Its transmitted closures no longer lie about
-``n0``, so their normals are baked too, in the frame of the view (``e_x`` along the view's tangential
-part, ``e_y = n0 x e_x``), packed with the other values.  The view's plane is a mirror of
-the geometry, so ``phi`` runs over ``[0, pi]`` (:data:`AZIMUTH_SAMPLES` slices), and a point with the
-lower normal on the other side reads its slice with ``e_y`` turned over.  Near normal view these
-closures turn with the view about ``n0``, so a slice's texels run along the view's angle ``theta_v``
-(texel ``i`` at ``theta_v = pi/2 (1 - i / (W - 1))``), not its cosine.  The slices lie side by side in
-each image, each a block of the ``W`` columns with one column repeated at either edge (so that Cubic
-interpolation, which reads a texel beyond its position, stays within the slice); the shader reads the
-two slices about ``phi`` and mixes them linearly.
+the view about ``n0``, from the lower normal.  Its transmitted closures no longer lie about ``n0``, so
+their normals are baked too, in the lower normal's frame (``w = t x n0``, the lower normal's direction
+along the surface, ``t`` the tilt axis, and ``n0``): the shader has ``t`` from the tilt itself, so the
+frame costs no normalisation.  A normal is held as its components along ``w`` and ``t`` over its component
+along ``n0`` (where the tangent plane meets it), two values, and ``n0 + x w + y t`` is left to the BSDF to
+normalise.  The plane of ``n0`` and ``w`` is a mirror of the geometry, so ``phi`` runs
+over ``[0, pi]`` (:data:`AZIMUTH_SAMPLES` slices), and a view on the other side reads its slice with
+``t``'s component turned over.  Near normal view these closures turn with the view about ``n0``, so a
+slice's texels run along the view's angle ``theta_v`` (texel ``i`` at ``theta_v = pi/2 (1 - i / (W - 1))``),
+not its cosine.  The slices lie side by side in each image, each a block of the ``W`` columns with one
+column repeated at either edge (so that Cubic interpolation, which reads a texel beyond its position,
+stays within the slice); the shader reads the two slices about ``phi`` and mixes them linearly.
 """
 from __future__ import annotations
 
@@ -38,8 +40,9 @@ from ..plan import EffectPlan
 from .base_shader import base_receives_light
 from .closures import Closure, ShadingResult
 
-TABLE_FORMAT = 3  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
-# images; 3: one-channel closures' values packed); baked tables of another format are rebaked
+TABLE_FORMAT = 4  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
+# images; 3: one-channel closures' values packed; 4: a tilted boundary's closure normals in the lower normal's
+# frame); baked tables of another format are rebaked
 COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured: docs/tables.md)
 # A tilted boundary's tables (measured: docs/tables.md#a-tilted-boundary): slices over the lower normal's
 # azimuth from the view's plane (0..pi), and texels along the view's angle in each.
@@ -108,14 +111,15 @@ class TableLayout:
     @property
     def packed_values(self) -> tuple[tuple[int, str], ...]:
         """The values packed four to an image, in order: ``(closure, what)``, ``what`` one of "weight",
-        "roughness" (one-channel closures), "anisotropy", "normal_x", "normal_y", "normal_z" (oriented)."""
+        "roughness" (one-channel closures), "anisotropy", "normal_x", "normal_y" (oriented: the normal's
+        components along ``w`` and ``b`` over its component along ``n0``, :func:`lower_frame`)."""
         out = []
         for k in range(len(self.closures)):
             if not self.has_image(k):
                 out += [(k, "weight"), (k, "roughness")]
             out.append((k, "anisotropy"))
             if k in self.oriented:
-                out += [(k, "normal_x"), (k, "normal_y"), (k, "normal_z")]
+                out += [(k, "normal_x"), (k, "normal_y")]
         return tuple(out)
 
     @property
@@ -177,17 +181,15 @@ def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
     return ops.combine(x, ops.madd(t, (h - 1.0) / h, 0.5 / h), 0.0)
 
 
-def view_frame(ops, n0, v, n1):
-    """The frame the tables of a tilted boundary are baked in: ``e_x`` along the view's tangential part
-    (at normal view, the lower normal's), ``e_y = n0 x e_x``; and the lower normal's azimuth from
-    ``e_x``, ``|phi|`` in ``[0, pi]``.  ``e_y`` comes turned over where the lower normal lies on its
-    negative side, so that a closure normal baked at ``|phi|`` is ``x e_x + y e_y + z n0``."""
-    lower = ops.normalize(n1 - n0 * ops.dot(n1, n0), ops.cross(n0, (0.0, 0.0, 1.0)))
-    e_x = ops.normalize(v - n0 * ops.dot(v, n0), lower)
-    e_y = ops.cross(n0, e_x)
-    b = ops.dot(n1, e_y)
-    phi = ops.atan2(ops.abs(b), ops.dot(n1, e_x))
-    return e_x, e_y * ops.select(ops.lt(b, 0.0), -1.0, 1.0), phi
+def lower_frame(ops, n0, v, t):
+    """The frame the tables of a tilted boundary are baked in, from the tilt axis ``t`` (unit, across
+    ``n0``): ``w = t x n0`` (the lower normal's direction along the surface), ``b``, and the view's azimuth
+    from ``w``, ``|phi|`` in ``[0, pi]``.  ``b`` is ``t`` turned towards the view's side (``t sign(v.t)``),
+    so that a closure normal baked at ``|phi|`` is ``x w + y b + z n0`` on either side of the mirror."""
+    w = ops.cross(t, n0)
+    across = ops.dot(v, t)
+    phi = ops.atan2(ops.abs(across), ops.dot(v, w))
+    return w, t * ops.sign(across), phi
 
 
 def _slice_reader(ops, layout: TableLayout, xy, phi):
@@ -209,14 +211,14 @@ def _slice_reader(ops, layout: TableLayout, xy, phi):
     return read
 
 
-def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, n1=None) -> ShadingResult:
+def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, axis=None) -> ShadingResult:
     """The closures of :func:`..program.shade` read from the baked tables (``ops.table(k, xy)``:
-    image ``k``'s colour and alpha at ``xy``), with the Base Shader's factor in ``extras``; ``n1``:
-    the lower normal (read where the layout is sliced by its azimuth)."""
+    image ``k``'s colour and alpha at ``xy``), with the Base Shader's factor in ``extras``; ``axis``:
+    a tilted boundary's tilt axis (:func:`.surface_prelude.tilt_axis`, read where the layout is sliced)."""
     xy = table_coordinates(ops, layout, P, n0, v, d)
-    phi = e_x = e_y = None
+    phi = frame = None
     if layout.sliced:
-        e_x, e_y, phi = view_frame(ops, n0, v, n1)
+        *frame, phi = lower_frame(ops, n0, v, axis)
     read = _slice_reader(ops, layout, xy, phi)
     res = ShadingResult()
     packed = {}  # image -> its four channels
@@ -232,8 +234,10 @@ def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, n1=
     for k, (name, channels) in enumerate(layout.closures):
         normal, u = n0, tangent
         if k in layout.oriented:
-            x, y, z = (value(k, what) for what in ("normal_x", "normal_y", "normal_z"))
-            normal = ops.normalize(e_x * x + e_y * y + n0 * z, n0)
+            # The normal's components over its component along n0: two values, and no normalisation here
+            # (the BSDF normalises its Normal).
+            x, y = (value(k, what) for what in ("normal_x", "normal_y"))
+            normal = ops.closure_normal(n0 + frame[0] * x + frame[1] * y, n0)
             u = ops.cross(normal, v)
         if layout.has_image(k):
             colour, roughness = read(layout.closure_image(k))
