@@ -58,7 +58,8 @@ def per_point_nodes(tree) -> int:
 
 
 class _PerPoint:
-    """:func:`per_point_nodes`'s walk: a group's nodes are counted with the set of its inputs fed per point."""
+    """:func:`per_point_nodes`'s walk: a group's nodes are counted with the set of its inputs fed per point.
+    Every answer is kept (by node or group node, and the inputs fed), so each is worked out once."""
 
     def __init__(self):
         self.memo = {}
@@ -69,16 +70,21 @@ class _PerPoint:
         if node.bl_idname == "NodeGroupInput":
             return socket.identifier in fed
         if node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None:
-            inner = self.fed_inputs(node, tree, fed)
-            out = next((n for n in node.node_tree.nodes if n.bl_idname == "NodeGroupOutput" and n.is_active_output),
-                       None)
-            return out is not None and any(self.varies(link.from_socket, node.node_tree, inner)
-                                           for s in out.inputs if s.identifier == socket.identifier
-                                           for link in s.links if not link.is_muted)
+            key = ("output", node.as_pointer(), socket.identifier, fed)
+            if key not in self.memo:
+                self.memo[key] = False
+                inner = self.fed_inputs(node, tree, fed)
+                out = next((n for n in node.node_tree.nodes
+                            if n.bl_idname == "NodeGroupOutput" and n.is_active_output), None)
+                self.memo[key] = out is not None and any(
+                    self.varies(link.from_socket, node.node_tree, inner)
+                    for s in out.inputs if s.identifier == socket.identifier
+                    for link in s.links if not link.is_muted)
+            return self.memo[key]
         return self.node_varies(node, tree, fed)
 
     def node_varies(self, node, tree, fed: frozenset) -> bool:
-        key = (node.as_pointer(), fed)
+        key = ("node", node.as_pointer(), fed)
         if key not in self.memo:
             self.memo[key] = False  # a cycle (none in a valid tree) counts as constant
             self.memo[key] = _unfolded(node) or any(self.varies(link.from_socket, tree, fed) for s in node.inputs
@@ -86,8 +92,12 @@ class _PerPoint:
         return self.memo[key]
 
     def fed_inputs(self, group_node, tree, fed: frozenset) -> frozenset:
-        return frozenset(s.identifier for s in group_node.inputs
-                         if any(self.varies(link.from_socket, tree, fed) for link in s.links if not link.is_muted))
+        key = ("fed", group_node.as_pointer(), fed)
+        if key not in self.memo:
+            self.memo[key] = frozenset(
+                s.identifier for s in group_node.inputs
+                if any(self.varies(link.from_socket, tree, fed) for link in s.links if not link.is_muted))
+        return self.memo[key]
 
     def count(self, tree, fed: frozenset) -> int:
         outputs = [n for n in tree.nodes if n.bl_idname in OUTPUT_NODES]
