@@ -326,10 +326,6 @@ class NodeOps:
         ok = self.gt(self.dot(v, v), 1e-20)
         return self.select_vec(ok, self.vmath("NORMALIZE", v), fallback)
 
-    def unit(self, v):
-        """``v / |v|``: one Normalize node (zero for a zero ``v``)."""
-        return self.vmath("NORMALIZE", v)
-
     def closure_normal(self, v, fallback):
         """A closure's Normal: ``v`` as it is, since the BSDF nodes normalise their Normal themselves (Cycles
         falls back to the shading normal where it is zero, EEVEE normalises it safely)."""

@@ -202,10 +202,6 @@ class OslOps:
         """Unit ``v``; ``fallback`` for a zero-length or non-finite ``v``."""
         return self.call_expr("safe_normalize_or", (v, fallback), "vector")
 
-    def unit(self, v):
-        """``v / |v|`` (OSL's normalize: zero for a zero ``v``)."""
-        return self.call_expr("normalize", (v,), "vector")
-
     def closure_normal(self, v, fallback):
         return self.normalize(v, fallback)
 

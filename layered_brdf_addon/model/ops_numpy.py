@@ -353,11 +353,6 @@ def nan_to_zero(x):
 
 
 
-def unit(v):
-    """``v / |v|``, zero for a zero ``v`` (Blender's Normalize)."""
-    return normalize(v, (0.0, 0.0, 0.0))
-
-
 def closure_normal(v, fallback):
     """A closure's normal, unit (the renderer's BSDFs normalise theirs)."""
     return normalize(v, fallback)

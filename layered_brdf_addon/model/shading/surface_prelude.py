@@ -20,7 +20,7 @@ def tangent_axis(ops, n0, up, fallback):
     """Tilt axis ``normalize(cross(up, n0))``; at the poles, where n0 is along ``up`` and the
     cross product vanishes (length below 1e-4), ``fallback``."""
     c = ops.cross(up, n0)
-    return ops.select_vec(ops.lt(ops.length(c), 1e-4), fallback, ops.unit(c))
+    return ops.select_vec(ops.lt(ops.length(c), 1e-4), fallback, ops.normalize(c, fallback))
 
 
 @shader_function
@@ -122,8 +122,8 @@ def layer_thickness(ops, P, p_obj, plan: EffectPlan, pattern=None):
 def tilt_axis(ops, P, n0):
     """The axis a tilted lower boundary turns ``n0`` about at this point (:func:`tilt_axis_about`), from
     the object's axes in world space: the tilt sticks to the object."""
-    up = ops.unit(ops.object_to_world((0.0, 0.0, 1.0)))
-    x_axis = ops.unit(ops.object_to_world((1.0, 0.0, 0.0)))
+    up = ops.normalize(ops.object_to_world((0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
+    x_axis = ops.normalize(ops.object_to_world((1.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
     return tilt_axis_about(ops, n0, P["tilt_azimuth"], up, x_axis)
 
 
