@@ -44,8 +44,8 @@ TABLE_FORMAT = 4  # what a texel holds (this module's layout; 2: cubic B-spline 
 # images; 3: one-channel closures' values packed; 4: a tilted boundary's closure normals in the lower normal's
 # frame); baked tables of another format are rebaked
 COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured: docs/tables.md)
-# A tilted boundary's tables (measured: docs/tables.md#a-tilted-boundary): slices over the lower normal's
-# azimuth from the view's plane (0..pi), and texels along the view's angle in each.
+# A tilted boundary's tables (measured: docs/tables.md#a-tilted-boundary): slices over the view's azimuth
+# about n0 from the lower normal (0..pi), and texels along the view's angle in each.
 AZIMUTH_SAMPLES = 25
 ANGLE_SAMPLES = 32
 PARALLEL_TOLERANCE = 1.0e-5  # a baked closure's normal may differ from n0 by this (rounding)
@@ -185,7 +185,7 @@ def lower_frame(ops, n0, v, t):
     """The frame the tables of a tilted boundary are baked in, from the tilt axis ``t`` (unit, across
     ``n0``): ``w = t x n0`` (the lower normal's direction along the surface), ``b``, and the view's azimuth
     from ``w``, ``|phi|`` in ``[0, pi]``.  ``b`` is ``t`` turned towards the view's side (``t sign(v.t)``),
-    so that a closure normal baked at ``|phi|`` is ``x w + y b + z n0`` on either side of the mirror."""
+    so that a closure normal baked at ``|phi|`` lies along ``n0 + x w + y b`` on either side of the mirror."""
     w = ops.cross(t, n0)
     across = ops.dot(v, t)
     phi = ops.atan2(ops.abs(across), ops.dot(v, w))
