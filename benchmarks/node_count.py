@@ -11,11 +11,9 @@ SKIPPED_NODES = {"NodeGroupInput", "NodeGroupOutput", "NodeReroute", "NodeFrame"
 OUTPUT_NODES = {"ShaderNodeOutputMaterial", "ShaderNodeOutputAOV", "NodeGroupOutput"}
 
 
-def interpreted_nodes(tree) -> int:
-    """Nodes Cycles/EEVEE evaluate in ``tree``: those an output depends on (a node nothing reads is
-    never compiled), nested groups expanded (each use counts, the part of the group its used outputs
-    need), group input/output, reroute and frame nodes left out.  The material's own output and
-    AOV nodes count, as in any material."""
+def compiled_nodes(tree) -> list:
+    """The nodes of ``tree`` that an output depends on (a node nothing reads is never compiled), group
+    input/output, reroute and frame nodes left out; a group node stands for its group."""
     outputs = [n for n in tree.nodes if n.bl_idname in OUTPUT_NODES]
     seen, stack = set(), list(outputs)
     while stack:
@@ -24,10 +22,16 @@ def interpreted_nodes(tree) -> int:
             continue
         seen.add(node.as_pointer())
         stack += [link.from_node for sock in node.inputs for link in sock.links if not link.is_muted]
+    return [node for node in tree.nodes if node.as_pointer() in seen and node.bl_idname not in SKIPPED_NODES]
+
+
+def interpreted_nodes(tree) -> int:
+    """Nodes Cycles/EEVEE evaluate in ``tree``: those an output depends on (a node nothing reads is
+    never compiled), nested groups expanded (each use counts, the part of the group its used outputs
+    need), group input/output, reroute and frame nodes left out.  The material's own output and
+    AOV nodes count, as in any material."""
     n = 0
-    for node in tree.nodes:
-        if node.as_pointer() not in seen or node.bl_idname in SKIPPED_NODES:
-            continue
+    for node in compiled_nodes(tree):
         if node.bl_idname == "ShaderNodeGroup":
             n += interpreted_nodes(node.node_tree) if node.node_tree is not None else 0
         else:
@@ -100,18 +104,8 @@ class _PerPoint:
         return self.memo[key]
 
     def count(self, tree, fed: frozenset) -> int:
-        outputs = [n for n in tree.nodes if n.bl_idname in OUTPUT_NODES]
-        seen, stack = set(), list(outputs)
-        while stack:
-            node = stack.pop()
-            if node.as_pointer() in seen:
-                continue
-            seen.add(node.as_pointer())
-            stack += [link.from_node for sock in node.inputs for link in sock.links if not link.is_muted]
         n = 0
-        for node in tree.nodes:
-            if node.as_pointer() not in seen or node.bl_idname in SKIPPED_NODES:
-                continue
+        for node in compiled_nodes(tree):
             if node.bl_idname == "ShaderNodeGroup":
                 if node.node_tree is not None:
                     n += self.count(node.node_tree, self.fed_inputs(node, tree, fed))

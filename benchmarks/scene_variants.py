@@ -38,8 +38,8 @@ class Variant:
 
     def record(self) -> dict:
         return dict(label=self.label, backend=self.backend, preset=self.preset, accuracy=self.accuracy,
-                    nodes=self.nodes, per_point_nodes=self.per_point, optics=self.optics, bake_ms=self.bake_ms, table_bytes=self.table_bytes,
-                    rebuild_ms=self.rebuild_ms)
+                    nodes=self.nodes, per_point_nodes=self.per_point, optics=self.optics, bake_ms=self.bake_ms,
+                    table_bytes=self.table_bytes, rebuild_ms=self.rebuild_ms)
 
 
 def stock_variants() -> list[Variant]:

@@ -98,11 +98,10 @@ def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int
     n0v, vv = ops_numpy.vec(n0), ops_numpy.vec(v)
     n1v = n0v
     zero = np.zeros_like(phi)
-    frame = (np.stack([np.cos(phi), np.sin(phi), zero], axis=-1), np.stack([np.sin(phi), -np.cos(phi), zero], axis=-1),
-             n0)
+    axis = np.stack([-np.sin(phi), np.cos(phi), zero], axis=-1)
+    frame = (np.stack([np.cos(phi), np.sin(phi), zero], axis=-1), -axis, n0)
     if plan.normals == "tilted":
-        axis = ops_numpy.vec(np.stack([-np.sin(phi), np.cos(phi), zero], axis=-1))
-        n1v = tilted_normal(pt, n0v, axis, float(P["tilt"]))
+        n1v = tilted_normal(pt, n0v, ops_numpy.vec(axis), float(P["tilt"]))
     res = shade(pt, inputs, n0v, n1v, d, vv, plan, WAVELENGTHS_NM)
     return res, passed_to_base(pt, plan, inputs, vv, n0v), frame
 
@@ -176,10 +175,10 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
     for k, cl in enumerate(res.glossy):
         if k in layout.oriented:
             normal = np.stack([_plane(a, shape) for a in ops_numpy.components(cl.normal)], axis=-1)
-            w, b, n0 = (np.einsum("...k,...k->...", normal, axis) for axis in frame)
-            n0 = np.maximum(n0, MIN_NORMAL_COS)
-            put(k, "normal_x", w / n0)
-            put(k, "normal_y", b / n0)
+            w, b, z = (np.einsum("...k,...k->...", normal, axis) for axis in frame)
+            z = np.maximum(z, MIN_NORMAL_COS)
+            put(k, "normal_x", w / z)
+            put(k, "normal_y", b / z)
         elif _off_normal(cl.normal) > PARALLEL_TOLERANCE:
             raise NotTabulable(f"closure {cl.name} does not lie about the upper normal")
         roughness = np.sqrt(np.clip(_plane(cl.alpha, shape), 0.0, 1.0))
