@@ -38,7 +38,7 @@ import time
 from pathlib import Path
 
 from scene_variants import (REFERENCE, THIN_FILM_IOR, THIN_FILM_NM, Variant, floor_variants, layered_variant,
-                            layered_variants, stock_variants)
+                            layered_variants, stock_variants, table_floor_variants)
 from timing import DIFFUSE, cost_per_sample, machine_info, spread, stock_material, timed_render
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -328,6 +328,10 @@ def parse_args(argv=None):
                     help=f"accuracy modes measured for {SPECTRAL_PRESET} (default: all)")
     ap.add_argument("--paper-optics", action="store_true",
                     help="also measure each physical-optics preset with the paper's optics")
+    ap.add_argument("--reads-floor", action="store_true",
+                    help="after each variant reading tables, its thickness pattern, tables' reads and closures "
+                         "alone (no other arithmetic: what a tabulated group cannot do without), and Principled "
+                         "BSDF + Thin Film with the same thickness pattern")
     ap.add_argument("--out", type=Path, default=OUT_JSON, help="the JSON to write")
     args = ap.parse_args(argv)
     base = {**DEFAULTS, "presets": tuple(PRESETS), "spectral_modes": ACCURACY_MODES,
@@ -350,14 +354,16 @@ def main(argv=None):
     obj = build_scene()
     stock = stock_variants()
     osl_measured = any(b.startswith("osl") for b in args.backends)
-    variants = (stock + floor_variants(stock[0] if osl_measured else None)
-                + layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET, args.spectral_modes,
-                                   args.paper_optics))
+    layered = layered_variants(obj, args.presets, args.backends, SPECTRAL_PRESET, args.spectral_modes,
+                               args.paper_optics)
+    if args.reads_floor:
+        layered = [f for v in layered for f in ([v, *table_floor_variants(v)] if v.backend == "tables" else [v])]
+    variants = stock + floor_variants(stock[0] if osl_measured else None) + layered
     d = dict(machine=machine_info(), seconds=0.0,
              settings=dict(size=SIZE, subdiv=SUBDIV_LEVELS, hdri=hdri_path().name, sun=SUN_STRENGTH,
                            samples=args.samples, reps=args.reps, threads=1, seed=SEED, quick=args.quick,
                            presets=args.presets, backends=args.backends, spectral_preset=SPECTRAL_PRESET,
-                           spectral_modes=args.spectral_modes, thin_film=[THIN_FILM_NM, THIN_FILM_IOR],
+                           spectral_modes=args.spectral_modes, reads_floor=args.reads_floor, thin_film=[THIN_FILM_NM, THIN_FILM_IOR],
                            clock="process CPU time (Cycles), wall time (EEVEE)"))
     print(f"{len(variants)} Cycles variants, samples {args.samples}, {args.reps} reps")
     d["cycles"] = measure_cycles(obj, variants, args.samples, args.reps)

@@ -122,6 +122,164 @@ def osl_closure_floor_material(label: str, glossy: int):
     return mat
 
 
+def _table_images(mat) -> dict:
+    """The baked tables a layered material's group reads: {image index: bpy image}."""
+    group = next(n.node_tree for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree)
+    return {int(n.label.rsplit(" ", 1)[1]): n.image for n in group.nodes
+            if n.bl_idname == "ShaderNodeTexImage" and n.label.startswith("Baked table ")}
+
+
+def _node_builder(nt):
+    """``node(kind, inputs, **props)``: a new node of ``nt``, its inputs (key, socket or value) linked or set."""
+    import bpy
+
+    def node(kind, inputs=(), **props):
+        n = nt.nodes.new(kind)
+        for key, value in props.items():
+            setattr(n, key, value)
+        for key, value in inputs:
+            if isinstance(value, bpy.types.NodeSocket):
+                nt.links.new(value, n.inputs[key])
+            else:
+                n.inputs[key].default_value = value
+        return n
+    return node
+
+
+def thickness_pattern(node, params, plan):
+    """The thickness pattern of ``params`` as the group makes it, with stock nodes (``node``:
+    :func:`_node_builder`): Blender's Noise Texture (4D fBm, normalised) on object coordinates, its factor
+    in [0, 1]; None for any other pattern."""
+    if plan.thickness != "noise":
+        return None
+    position = node("ShaderNodeTexCoord").outputs["Object"]
+    return node("ShaderNodeTexNoise", (("Vector", position), ("W", params.noise_phase), ("Scale", params.noise_scale),
+                                       ("Detail", params.noise_detail), ("Roughness", params.noise_roughness)),
+                noise_dimensions="4D", noise_type="FBM", normalize=True).outputs["Fac"]
+
+
+def table_reads_floor_material(label: str, source, params):
+    """What a tabulated node group cannot do without: its thickness pattern, the reads of its tables and its
+    closures, and no other arithmetic.  ``source`` is the layered material of ``params`` reading its tables;
+    its images are read here as the group reads them (Cubic, extended edges; a sliced layout twice, between
+    two slices, with the group's slice arithmetic, and mixed), along x at the shading point's Generated
+    coordinate and along y at the thickness pattern's factor, and the closures take their weights, roughness
+    and anisotropy from the reads, about the shading normal and the Tangent node's tangent (no lower normal,
+    view frame, Normal input's checks or closure normals)."""
+    import bpy
+
+    from layered_brdf_addon.model.policy import plan_effects
+    from layered_brdf_addon.model.table_bake import table_layout
+
+    plan = plan_effects(params)
+    layout = table_layout(params, plan)
+    images = _table_images(source)
+    mat = bpy.data.materials.new(label)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    node = _node_builder(nt)
+
+    def math_node(op, a, b):
+        return node("ShaderNodeMath", ((0, a), (1, b)), operation=op).outputs[0]
+
+    def vector_node(op, a, b):
+        return node("ShaderNodeVectorMath", ((0, a), (1, b)), operation=op).outputs[0]
+
+    generated = node("ShaderNodeTexCoord").outputs["Generated"]
+    tangent = node("ShaderNodeTangent").outputs["Tangent"]
+    xy = vector_node("MULTIPLY", generated, (1.0 / layout.azimuths, 1.0, 0.0))
+    factor = thickness_pattern(node, params, plan)
+    if factor is not None:
+        x = node("ShaderNodeSeparateXYZ", (("Vector", xy),)).outputs["X"]
+        xy = node("ShaderNodeCombineXYZ", (("X", x), ("Y", factor))).outputs[0]
+
+    def table(k, at):
+        n = node("ShaderNodeTexImage", (("Vector", at),), interpolation="Cubic", extension="EXTEND")
+        n.image = images[k]
+        return n.outputs["Color"], n.outputs["Alpha"]
+
+    if layout.sliced:  # the group's slice arithmetic (tables._slice_reader), on a per-point angle
+        phi = node("ShaderNodeSeparateXYZ", (("Vector", generated),)).outputs["Z"]
+        u = node("ShaderNodeClamp", (("Value", math_node("MULTIPLY", phi, layout.azimuths - 1.0)),
+                                     ("Min", 0.0), ("Max", layout.azimuths - 1.0))).outputs[0]
+        i0 = math_node("MINIMUM", math_node("FLOOR", u, 0.0), layout.azimuths - 2.0)
+        f = math_node("SUBTRACT", u, i0)
+        step = 1.0 / layout.azimuths
+        offset = node("ShaderNodeCombineXYZ", (("X", math_node("MULTIPLY", i0, step)),)).outputs[0]
+        xy0 = vector_node("ADD", xy, offset)
+        xy1 = vector_node("ADD", xy0, (step, 0.0, 0.0))
+
+        def read(k):
+            (c0, a0), (c1, a1) = table(k, xy0), table(k, xy1)
+            colour = node("ShaderNodeMix", (("Factor", f), (6, c0), (7, c1)), data_type="RGBA").outputs[2]
+            alpha = node("ShaderNodeMix", (("Factor", f), (2, a0), (3, a1)), data_type="FLOAT").outputs[0]
+            return colour, alpha
+    else:
+        def read(k):
+            return table(k, xy)
+
+    packed = {}
+
+    def value(k, what):
+        image, channel = layout.slot(k, what)
+        if image not in packed:
+            colour, alpha = read(image)
+            packed[image] = [*node("ShaderNodeSeparateXYZ", (("Vector", colour),)).outputs, alpha]
+        return packed[image][channel]
+
+    for k in layout.oriented:  # read, as the group reads them, though the normal is the shading normal here
+        value(k, "normal_x"), value(k, "normal_y")
+    diffuse_colour, _ = table(layout.diffuse_image, xy)
+    total = node(DIFFUSE, (("Color", diffuse_colour),)).outputs[0]
+    for k, (_, channels) in enumerate(layout.closures):
+        if layout.has_image(k):
+            colour, roughness = read(layout.closure_image(k))
+        else:
+            w, roughness = value(k, "weight"), value(k, "roughness")
+            colour = node("ShaderNodeCombineXYZ", [("XYZ"[c], w) for c in channels]).outputs[0]
+        g = node(GLOSSY, (("Color", colour), ("Roughness", roughness), ("Anisotropy", value(k, "anisotropy")),
+                          ("Tangent", tangent)), distribution="BECKMANN")
+        total = node("ShaderNodeAddShader", ((0, total), (1, g.outputs[0]))).outputs[0]
+    out = node("ShaderNodeOutputMaterial")
+    nt.links.new(total, out.inputs["Surface"])
+    return mat
+
+
+def thin_film_with_pattern_material(label: str, params):
+    """Principled BSDF + Thin Film with the thickness pattern of ``params`` (:func:`thickness_pattern`),
+    ``d_min + (d_max - d_min) factor`` nm: what an artist builds for a film that varies like this preset's."""
+    from layered_brdf_addon.model.policy import plan_effects
+
+    mat = stock_material(label, PRINCIPLED, thin_film_inputs(THIN_FILM_NM, THIN_FILM_IOR))
+    nt = mat.node_tree
+    node = _node_builder(nt)
+    factor = thickness_pattern(node, params, plan_effects(params))
+    if factor is not None:
+        d = node("ShaderNodeMapRange", (("Value", factor), ("To Min", params.d_min), ("To Max", params.d_max)))
+        principled = next(n for n in nt.nodes if n.bl_idname == PRINCIPLED)
+        nt.links.new(d.outputs["Result"], principled.inputs["Thin Film Thickness"])
+    return mat
+
+
+def table_floor_variants(v: Variant) -> list[Variant]:
+    """For the tabulated variant ``v``: its floor (:func:`table_reads_floor_material`) and, where its thickness
+    follows a pattern, Principled BSDF + Thin Film with that pattern (:func:`thin_film_with_pattern_material`)."""
+    from layered_brdf_addon.model import preset
+    from layered_brdf_addon.model.policy import plan_effects
+
+    params = preset(v.preset).replace(accuracy=v.accuracy, evaluation="tables", optics=v.optics)
+    label = f"{v.preset} {v.accuracy}: pattern, table reads and closures alone"
+    f = kept_variant(label, table_reads_floor_material(label, v.material, params))
+    f.backend, f.accuracy, f.optics = "reads-floor", v.accuracy, v.optics
+    f.per_point = per_point_nodes(f.material.node_tree)
+    f.nodes = interpreted_nodes(f.material.node_tree)
+    out = [f]
+    if plan_effects(params).thickness == "noise":
+        label = f"{REFERENCE}, thickness from {v.preset}'s noise"
+        out.append(kept_variant(label, thin_film_with_pattern_material(label, params)))
+    return out
+
+
 def floor_variants(reference: Variant | None = None) -> list[Variant]:
     """The closures alone, as stock nodes; with the ``reference`` variant (when OSL is measured), also as an
     OSL shader, and the reference rendered by Cycles' OSL shading system: what OSL itself costs."""

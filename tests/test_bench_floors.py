@@ -1,0 +1,69 @@
+"""The scene benchmark's floors for a group reading tables (benchmarks/scene_variants.py, ``--reads-floor``):
+the same thickness pattern, the same table reads and the same closures as the group, without the rest of its
+arithmetic; and Principled BSDF + Thin Film with the same thickness pattern."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import bpy
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+from node_count import per_point_nodes  # noqa: E402
+from scene_variants import layered_variant, table_floor_variants  # noqa: E402
+
+from layered_brdf_addon.model import preset  # noqa: E402
+
+
+def _reads(tree) -> list:
+    """The images a tree's Image Texture nodes read, once per node, nested groups included."""
+    out = []
+    for n in tree.nodes:
+        if n.bl_idname == "ShaderNodeTexImage":
+            out.append(n.image.name)
+        elif n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None:
+            out += _reads(n.node_tree)
+    return sorted(out)
+
+
+def _variants(name: str):
+    bpy.ops.mesh.primitive_uv_sphere_add()
+    obj = bpy.context.active_object
+    obj.data.materials.append(None)
+    v = layered_variant(obj, name, "tables", preset(name).accuracy)
+    return v, table_floor_variants(v)
+
+
+@pytest.mark.parametrize("name, reads", [("fig6_medium", 11), ("oil_slick", 4)])
+def test_floor_reads_what_the_group_reads(name, reads):
+    v, (floor, *_) = _variants(name)
+    assert _reads(floor.material.node_tree) == _reads(v.material.node_tree)
+    assert len(_reads(floor.material.node_tree)) == reads
+    images = {n.image.name: n for n in floor.material.node_tree.nodes if n.bl_idname == "ShaderNodeTexImage"}
+    assert {(n.interpolation, n.extension) for n in images.values()} == {("Cubic", "EXTEND")}
+    glossy = [n for n in floor.material.node_tree.nodes if n.bl_idname in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")]
+    assert len(glossy) == (4 if name == "fig6_medium" else 2)
+    assert all(n.inputs["Color"].is_linked and n.inputs["Roughness"].is_linked for n in glossy)
+    assert floor.per_point < v.per_point
+
+
+def test_thin_film_with_the_presets_noise():
+    p = preset("oil_slick")
+    _, (_, principled) = _variants("oil_slick")
+    nt = principled.material.node_tree
+    bsdf = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    map_range = bsdf.inputs["Thin Film Thickness"].links[0].from_node
+    assert (map_range.inputs["To Min"].default_value, map_range.inputs["To Max"].default_value) == \
+        pytest.approx((p.d_min, p.d_max))
+    noise = map_range.inputs["Value"].links[0].from_node
+    assert (noise.noise_dimensions, noise.noise_type, noise.normalize) == ("4D", "FBM", True)
+    assert noise.inputs["Scale"].default_value == pytest.approx(p.noise_scale)
+    assert noise.inputs["Detail"].default_value == pytest.approx(p.noise_detail)
+    assert per_point_nodes(nt) == 5  # coordinates, noise, map range, BSDF, output
+
+
+def test_no_pattern_no_thin_film_variant():
+    """The soap bubble's thickness follows the height, not a noise: only the floor."""
+    _, floors = _variants("soap_bubble")
+    assert [f.backend for f in floors] == ["reads-floor"]
