@@ -363,7 +363,8 @@ def main(argv=None):
              settings=dict(size=SIZE, subdiv=SUBDIV_LEVELS, hdri=hdri_path().name, sun=SUN_STRENGTH,
                            samples=args.samples, reps=args.reps, threads=1, seed=SEED, quick=args.quick,
                            presets=args.presets, backends=args.backends, spectral_preset=SPECTRAL_PRESET,
-                           spectral_modes=args.spectral_modes, reads_floor=args.reads_floor, thin_film=[THIN_FILM_NM, THIN_FILM_IOR],
+                           spectral_modes=args.spectral_modes, reads_floor=args.reads_floor,
+                           thin_film=[THIN_FILM_NM, THIN_FILM_IOR],
                            clock="process CPU time (Cycles), wall time (EEVEE)"))
     print(f"{len(variants)} Cycles variants, samples {args.samples}, {args.reps} reps")
     d["cycles"] = measure_cycles(obj, variants, args.samples, args.reps)

@@ -42,7 +42,8 @@ def test_floor_reads_what_the_group_reads(name, reads):
     assert len(_reads(floor.material.node_tree)) == reads
     images = {n.image.name: n for n in floor.material.node_tree.nodes if n.bl_idname == "ShaderNodeTexImage"}
     assert {(n.interpolation, n.extension) for n in images.values()} == {("Cubic", "EXTEND")}
-    glossy = [n for n in floor.material.node_tree.nodes if n.bl_idname in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")]
+    glossy = [n for n in floor.material.node_tree.nodes
+              if n.bl_idname in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")]
     assert len(glossy) == (4 if name == "fig6_medium" else 2)
     assert all(n.inputs["Color"].is_linked and n.inputs["Roughness"].is_linked for n in glossy)
     assert floor.per_point < v.per_point
