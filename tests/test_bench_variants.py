@@ -1,6 +1,7 @@
-"""The scene benchmark's floors for a group reading tables (benchmarks/scene_variants.py, ``--reads-floor``):
-the same thickness pattern, the same table reads and the same closures as the group, without the rest of its
-arithmetic; and Principled BSDF + Thin Film with the same thickness pattern."""
+"""The materials the benchmarks build beside the add-on's: a tabulated group's floor (benchmarks/scene_variants.py,
+``--reads-floor``: the same thickness pattern, table reads and closures as the group, without the rest of its
+arithmetic), Principled BSDF + Thin Film with the same thickness pattern, and the altered copies of a tilted
+boundary's group that benchmarks/eevee_table_reads.py renders."""
 from __future__ import annotations
 
 import sys
@@ -11,6 +12,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 from node_count import per_point_nodes  # noqa: E402
+from eevee_table_reads import read_with, slices_by_position, without_slice_offset  # noqa: E402
 from scene_variants import layered_variant, table_floor_variants  # noqa: E402
 
 from layered_brdf_addon.model import preset  # noqa: E402
@@ -68,3 +70,36 @@ def test_no_pattern_no_thin_film_variant():
     """The soap bubble's thickness follows the height, not a noise: only the floor."""
     _, floors = _variants("soap_bubble")
     assert [f.backend for f in floors] == ["reads-floor"]
+
+
+def _group(mat):
+    return next(n.node_tree for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeGroup")
+
+
+def _offsets(mat) -> set:
+    """The inputs feeding the X of the Combine XYZ nodes that offset the group's sliced reads."""
+    out = set()
+    for n in _group(mat).nodes:
+        if n.bl_idname == "ShaderNodeVectorMath" and n.operation == "ADD" and n.inputs[1].is_linked:
+            combine = n.inputs[1].links[0].from_node
+            if combine.bl_idname == "ShaderNodeCombineXYZ" and not combine.inputs["Y"].is_linked:
+                x = combine.inputs["X"]
+                out.add(x.links[0].from_node.operation if x.is_linked else x.default_value)
+    return out
+
+
+def test_altered_groups_leave_the_original_alone():
+    v, _ = _variants("fig6_medium")
+    before = _offsets(v.material)
+    assert before == {"MULTIPLY"}  # i0 times a slice's width
+    no_offset = without_slice_offset(v.material, "no offset")
+    assert _offsets(no_offset) == {0.0}
+    by_position = slices_by_position(v.material, "by position", 25)
+    assert any(n.outputs["Generated"].is_linked for n in _group(by_position).nodes
+               if n.bl_idname == "ShaderNodeTexCoord")  # the slice from the object's height
+    linear = read_with(v.material, "linear", "Linear")
+    assert {n.interpolation for n in _group(linear).nodes if n.bl_idname == "ShaderNodeTexImage"} == {"Linear"}
+    # the add-on's material and group are untouched
+    assert _offsets(v.material) == before
+    assert {n.interpolation for n in _group(v.material).nodes if n.bl_idname == "ShaderNodeTexImage"} == {"Cubic"}
+    assert len({id(_group(m)) for m in (v.material, no_offset, by_position, linear)}) == 4
