@@ -31,7 +31,7 @@ import os
 from pathlib import Path
 
 from bench_scene import MAGENTA_FAILED, build_scene, eevee_engine, magenta_fraction, use_variant
-from scene_variants import kept_variant, layered_variant, stock_variants, table_floor_variants
+from scene_variants import kept_variant, layered_variant, node_builder, stock_variants, table_floor_variants
 from timing import machine_info, spread, timed_render
 
 OUT_JSON = Path(__file__).resolve().parent / "results" / "eevee_table_reads.json"
@@ -80,26 +80,14 @@ def slices_by_position(mat, label: str, azimuths: int):
     """The group with its slice chosen by the object's height (Generated z) instead of the view's azimuth:
     the same reads of the same images, the slices changing smoothly over the surface."""
     copy, group = _group_copy(mat, label)
-    offsets = _slice_offsets(group)
-    z = _node(group, "ShaderNodeSeparateXYZ", {0: _node(group, "ShaderNodeTexCoord").outputs["Generated"]})
-    index = _node(group, "ShaderNodeMath", {0: z.outputs["Z"], 1: azimuths - 2.0}, operation="MULTIPLY")
-    index = _node(group, "ShaderNodeMath", {0: index.outputs[0]}, operation="FLOOR")
-    offset = _node(group, "ShaderNodeMath", {0: index.outputs[0], 1: 1.0 / azimuths}, operation="MULTIPLY")
-    for combine in offsets:
-        group.links.new(offset.outputs[0], combine.inputs["X"])
+    node = node_builder(group)
+    z = node("ShaderNodeSeparateXYZ", ((0, node("ShaderNodeTexCoord").outputs["Generated"]),)).outputs["Z"]
+    index = node("ShaderNodeMath", ((0, z), (1, azimuths - 2.0)), operation="MULTIPLY").outputs[0]
+    index = node("ShaderNodeMath", ((0, index),), operation="FLOOR").outputs[0]
+    offset = node("ShaderNodeMath", ((0, index), (1, 1.0 / azimuths)), operation="MULTIPLY").outputs[0]
+    for combine in _slice_offsets(group):
+        group.links.new(offset, combine.inputs["X"])
     return copy
-
-
-def _node(group, kind: str, inputs: dict | None = None, **props):
-    node = group.nodes.new(kind)
-    for key, value in props.items():
-        setattr(node, key, value)
-    for key, value in (inputs or {}).items():
-        if isinstance(value, (int, float)):
-            node.inputs[key].default_value = value
-        else:
-            group.links.new(value, node.inputs[key])
-    return node
 
 
 def read_with(mat, label: str, interpolation: str):
@@ -142,7 +130,7 @@ def slice_jumps(obj, tables) -> float:
 
     copy, group = _group_copy(tables.material, f"{tables.label}: slice position")
     floor = next(n for n in group.nodes if n.bl_idname == "ShaderNodeMath" and n.operation == "FLOOR")
-    emission = _node(group, "ShaderNodeEmission", {"Color": floor.inputs[0].links[0].from_socket})
+    emission = node_builder(group)("ShaderNodeEmission", (("Color", floor.inputs[0].links[0].from_socket),))
     output = next(n for n in group.nodes if n.bl_idname == "NodeGroupOutput")
     group.links.new(emission.outputs[0], next(s for s in output.inputs if s.type == "SHADER"))
     use_variant(obj, kept_variant(copy.name, copy))

@@ -129,7 +129,7 @@ def _table_images(mat) -> dict:
             if n.bl_idname == "ShaderNodeTexImage" and n.label.startswith("Baked table ")}
 
 
-def _node_builder(nt):
+def node_builder(nt):
     """``node(kind, inputs, **props)``: a new node of ``nt``, its inputs (key, socket or value) linked or set."""
     import bpy
 
@@ -148,7 +148,7 @@ def _node_builder(nt):
 
 def thickness_pattern(node, params, plan):
     """The thickness pattern of ``params`` as the group makes it, with stock nodes (``node``:
-    :func:`_node_builder`): Blender's Noise Texture (4D fBm, normalised) on object coordinates, its factor
+    :func:`node_builder`): Blender's Noise Texture (4D fBm, normalised) on object coordinates, its factor
     in [0, 1]; None for any other pattern."""
     if plan.thickness != "noise":
         return None
@@ -177,7 +177,7 @@ def table_reads_floor_material(label: str, source, params):
     mat = bpy.data.materials.new(label)
     nt = mat.node_tree
     nt.nodes.clear()
-    node = _node_builder(nt)
+    node = node_builder(nt)
 
     def math_node(op, a, b):
         return node("ShaderNodeMath", ((0, a), (1, b)), operation=op).outputs[0]
@@ -252,7 +252,7 @@ def thin_film_with_pattern_material(label: str, params):
 
     mat = stock_material(label, PRINCIPLED, thin_film_inputs(THIN_FILM_NM, THIN_FILM_IOR))
     nt = mat.node_tree
-    node = _node_builder(nt)
+    node = node_builder(nt)
     factor = thickness_pattern(node, params, plan_effects(params))
     if factor is not None:
         d = node("ShaderNodeMapRange", (("Value", factor), ("To Min", params.d_min), ("To Max", params.d_max)))
