@@ -26,11 +26,9 @@ Writes benchmarks/results/eevee_table_reads.json and prints a table.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 from pathlib import Path
 
-from bench_scene import MAGENTA_FAILED, build_scene, eevee_engine, magenta_fraction, use_variant
+from bench_scene import MAGENTA_FAILED, build_scene, eevee_engine, magenta_fraction, use_variant, write_json
 from scene_variants import kept_variant, layered_variant, node_builder, stock_variants, table_floor_variants
 from timing import machine_info, spread, timed_render
 
@@ -217,10 +215,7 @@ def main(argv=None):
     jumps = slice_jumps(obj, vs[1])
     d = dict(machine=machine_info(), engine=eevee_engine(), preset=args.preset, samples=list(args.samples),
              reps=args.reps, slice_jumps=jumps, rows=measure(obj, vs, tuple(args.samples), args.reps))
-    args.out.parent.mkdir(exist_ok=True)
-    tmp = args.out.with_suffix(".partial")
-    tmp.write_text(json.dumps(d, indent=1))
-    os.replace(tmp, args.out)
+    write_json(d, args.out)
     print(table(d))
 
 
