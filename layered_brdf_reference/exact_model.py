@@ -23,6 +23,8 @@ from layered_brdf_addon.model.program import (band_cosine, film_beams, film_diff
 from layered_brdf_addon.model.spectral_band import per_channel
 from layered_brdf_addon.model.spectral_tables import tables
 
+from .lobe_albedo import layer_albedo, reflected_albedo
+
 TWO_PI = 2.0 * np.pi
 EXACT_HARMONICS = 4  # the exact model's thin-film optics: harmonics of the beams bouncing in the layer
 
@@ -176,8 +178,9 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
     c_t = -(ti_to - 2.0 * ti_n1 * to_n1)  # <r_ti, -t_o>, eq. 10
     through = refracts & (ti_n1 < 0.0) & (to_n1 < 0.0) & ok[..., None]  # eq. 11
     if optics == "physical":
+        rti_n0 = -s_i - 2.0 * ti_n1 * n0_n1[..., None]  # <r_ti, n0>: the transmitted lobe's centre
         return _film_terms(cos_l, cos_v, c_r, np.where(through, c_t, 0.0), s_i, s_o, r1, d, e0, e1, r0, lam, band,
-                           n2, k2, orders)
+                           n2, k2, orders, rti_n0)
 
     # Transmitted part, eqs. 9-10, lobe normalised by (e1 + 2) / (2 pi r1^2) (SPEC).
     Tc = transmission_factor(-s_o, f)
@@ -204,8 +207,16 @@ def _channel_values(x, shape):
     return ops_numpy.vec(a) if shape[-1] == 3 else a
 
 
-def _film_terms(cos_l, cos_v, c_r, c_t, s_i, s_o, r1, d, e0, e1, r0, lam, band, n2, k2, orders):
-    """The physical mode's terms of :func:`specular_terms` (see there), per channel."""
+def _film_terms(cos_l, cos_v, c_r, c_t, s_i, s_o, r1, d, e0, e1, r0, lam, band, n2, k2, orders, rti_n0):
+    """The physical mode's terms of :func:`specular_terms` (see there), per channel.
+
+    Energy-keeping lobes: each lobe is divided by its own directional albedo at the light's
+    incidence (:mod:`.lobe_albedo`: the reflected lobe's about the mirror direction, clipped at the
+    horizon; the transmitted lobe's inside the layer about its centre ``r_ti``, through the critical
+    cone), so that, integrated over the outgoing hemisphere, the reflected lobe returns the top
+    boundary's reflectance ``R01`` and the transmitted lobe the beams' share ``T`` at every incidence
+    and roughness, and a film that absorbs nothing, over a clear base, returns all the light with
+    what the base passes."""
     shape = np.broadcast_shapes(np.shape(cos_l), np.shape(r1), np.shape(s_i), np.shape(d))
 
     def v(x):
@@ -214,10 +225,13 @@ def _film_terms(cos_l, cos_v, c_r, c_t, s_i, s_o, r1, d, e0, e1, r0, lam, band, 
     r1v, n2v, k2v = v(r1), v(n2), v(k2)
     f = film_beams(ops_numpy, v(cos_l), v(s_i), r1v, r0, n2v, k2v, orders=orders)
     R01, Tb = np.asarray(f["R01"]), np.asarray(f["T"])
-    R = R01 * phong_norm(e0) * phong_lobe(c_r, e0)
+    R = R01 * phong_norm(e0) * phong_lobe(c_r, e0) / np.maximum(reflected_albedo(e0, cos_l), 1e-6)
     # The beams leave through the top boundary at the view, not at the light.
-    leave = (1.0 - np.asarray(fresnel_reflectance(ops_numpy, v(cos_v), r0 / r1v))) / np.maximum(1.0 - R01, 1e-6)
-    T = Tb * leave * (phong_norm(e1) / (r1 * r1)) * phong_lobe(c_t, e1)
+    R01_l = np.asarray(fresnel_reflectance(ops_numpy, v(cos_l), r0 / r1v))
+    leave = (1.0 - np.asarray(fresnel_reflectance(ops_numpy, v(cos_v), r0 / r1v))) / np.maximum(1.0 - R01_l, 1e-6)
+    shape_t = layer_albedo(e1, r0 / np.asarray(r1, dtype=float), np.broadcast_to(rti_n0, shape)) / np.maximum(
+        1.0 - R01_l, 1e-6)
+    T = Tb * leave * (phong_norm(e1) / (r1 * r1)) * phong_lobe(c_t, e1) / np.maximum(shape_t, 1e-6)
     opd, slope = interference_path(ops_numpy, r1, d, s_i, s_o)
     phase = np.pi * opd / lam
     waves = np.asarray(harmonics(ops_numpy, f, v(lam), v(opd), v(slope), r1v, orders, band=band, dispersion=True,

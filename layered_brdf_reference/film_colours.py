@@ -9,6 +9,7 @@ measured ``n(lambda)``, ``k(lambda)``, seen under D65 (:mod:`.thin_film`).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -96,3 +97,58 @@ def film_errors(film: str, below: str, thickness_nm, theta_deg: float, optics: s
         reference_lab = reference_film_lab(film, below, thickness_nm, theta_deg)
     model = rgb_to_lab(model_film_rgb(film, below, thickness_nm, theta_deg, optics, accuracy))
     return thin_film.delta_e_2000(model, reference_lab)
+
+
+# --------------------------------------------------------------------------
+# What the lobes return: the BRDF integrated over the hemisphere at one incidence.
+ALBEDO_ANGLES_DEG = (0.0, 30.0, 60.0, 80.0)
+ALBEDO_ROUGHNESS = 0.1  # the films' Roughness (Beckmann alpha 0.01): a smooth film
+FORMS = ("closures", "exact")
+
+
+def conformal_film(film: str, below: str, thickness_nm, roughness: float = ALBEDO_ROUGHNESS,
+                   accuracy: str = "analytic") -> LayeredParams:
+    """A film of ``film`` on ``below`` whose two boundaries are equally rough seen from outside (the
+    paper's in-layer lobe is ``r1^2`` times narrower: ``e1 = e0 r1^2``), parallel, of Roughness
+    ``roughness`` (``e0 = (Roughness^-4 - 1) / 2``), no diffuse part."""
+    p = film_params(film, below, thickness_nm, "physical", accuracy)
+    e0 = (roughness ** -4 - 1.0) / 2.0
+    return p.replace(e0=e0, e1=e0 * p.r1[1] ** 2, kd=0.0)
+
+
+def _closure_shading(params, n0, n1, d, l, v):
+    from layered_brdf_addon.model.policy import plan_effects
+
+    from .closures import evaluate_closures, shade_closures
+
+    res = shade_closures(params, n0, n1, d, v, plan_effects(params))
+    return evaluate_closures(res, n0, v, l, params.lobe)
+
+
+def _exact_outgoing(params, n0, n1, d, o, light):
+    """``f(i, o) <n0, o>`` with the light arriving from ``light`` (its direction, away from the surface):
+    integrated over the sampled ``o``, the exact model's directional albedo at that incidence."""
+    from layered_brdf_addon.model.geometry import dot
+
+    from .exact_model import layered_brdf
+
+    f = layered_brdf(-light, o, n0, n1, d, params, ng=n0)
+    return np.maximum(dot(n0, o), 0.0)[..., None] * f
+
+
+def directional_albedo(film: str, below: str, thickness_nm, theta_deg: float, form: str = "closures",
+                       roughness: float = ALBEDO_ROUGHNESS, samples: int = 16384, seed: int = 1) -> np.ndarray:
+    """The conformal film's directional albedo at ``theta_deg`` (linear Rec.709, one row per thickness):
+    ``form="closures"``: the closures the shaders return (:mod:`.closures`, Cycles' own evaluation),
+    integrated over the light's directions for the view at ``theta_deg`` (what a white furnace renders);
+    ``"exact"``: the exact model integrated over the outgoing directions for light from ``theta_deg``.
+    Monte Carlo (:func:`.lighting.environment_shading`), the same samples for every thickness."""
+    from .lighting import environment_shading
+
+    d = np.atleast_1d(np.asarray(thickness_nm, dtype=float))
+    p = conformal_film(film, below, d, roughness)
+    n = np.tile([0.0, 0.0, 1.0], (d.size, 1))
+    t = math.radians(theta_deg)
+    v = np.array([math.sin(t), 0.0, math.cos(t)])
+    shading = _closure_shading if form == "closures" else _exact_outgoing
+    return environment_shading(p, n, n, d, v, samples=samples, seed=seed, shading=shading)

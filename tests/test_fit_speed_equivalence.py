@@ -12,7 +12,7 @@ from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.cycles_closures import closure_shading, shade_closures
 from layered_brdf_addon.fit.environment import Environment
 from layered_brdf_addon.fit.free import FreeParameters, default_vary
-from layered_brdf_addon.fit.see_through import base_shader_weight, far_side
+from layered_brdf_addon.fit.see_through import base_transmittance, far_side
 from layered_brdf_addon.fit.solve import DIFF_STEP, _Objective
 from layered_brdf_addon.fit.targets import NOISE_MEDIAN, SphereTarget, SphereView, noise_levels
 from layered_brdf_addon.model.policy import plan_effects
@@ -53,19 +53,22 @@ def view_by_view(target: SphereTarget, params) -> np.ndarray:
         d_noise = np.full(len(n0), params.d_min + (params.d_max - params.d_min) * NOISE_MEDIAN)
 
         def side(n, p):
+            """The side's pixels and what it passes to a clear base."""
             d = d_noise if field_ is None else field_(p)
             n1 = lower_normal(params, n, p, d)
+            vv = np.broadcast_to(v, n.shape)
+            passed = base_transmittance(params, shade_closures(params, n, n1, d, vv, plan), n, vv, plan)
             if view.environment is not None:
-                return view.environment.shade(shade_closures(params, n, n1, d, v, plan), n, v, plan.lobe, ng=n)
-            return view.sun.strength * closure_shading(params, n, n1, d, view.sun.l, v, ng=n, plan=plan)
+                return view.environment.shade(shade_closures(params, n, n1, d, v, plan), n, v, plan.lobe,
+                                              ng=n), passed
+            return view.sun.strength * closure_shading(params, n, n1, d, view.sun.l, v, ng=n, plan=plan), passed
 
-        pixels = side(n0, pts["p_object"])
+        pixels, t_front = side(n0, pts["p_object"])
         if params.base_layer == "transparent":
             p_far, n_far = far_side(n0, v)
-            vv = np.broadcast_to(v, n0.shape)
             behind = np.zeros(3) if view.environment is None else view.environment.radiance(-v)
-            w_front, w_back = base_shader_weight(params, n0, vv, plan), base_shader_weight(params, n_far, vv, plan)
-            pixels = pixels + w_front[:, None] * (side(n_far, p_far) + w_back[:, None] * behind)
+            far, t_back = side(n_far, p_far)
+            pixels = pixels + t_front * (far + t_back * behind)
         out.append(pixels)
     return np.concatenate(out)
 

@@ -63,9 +63,13 @@ def light_computed_and_tabulated(p, rng):
     inputs = program.program_inputs(program.clamped_inputs(pt, plan))
     computed = program.shade(pt, inputs, vec(n0), vec(n0), d, vec(v), replace(plan, tables=False))
     tabulated = tabulated_result(p, plan, layout, texels, n0, v, d)
-    base = np.broadcast_to(program.passed_to_base(pt, plan, inputs, vec(v), vec(n0)), d.shape)
-    return (evaluate_closures(computed, n0, v, l), evaluate_closures(tabulated, n0, v, l), base,
-            np.broadcast_to(tabulated.extras["base_weight"], d.shape))
+    weight, passed = program.passed_to_base(pt, plan, inputs, vec(v), vec(n0), computed.extras.get("reflected"))
+    base = np.concatenate([np.broadcast_to(weight, d.shape)[..., None],
+                           np.broadcast_to(np.asarray(passed, dtype=float), d.shape + (3,))], axis=-1)
+    read = np.concatenate([np.broadcast_to(tabulated.extras["base_weight"], d.shape)[..., None],
+                           np.broadcast_to(np.asarray(tabulated.extras["transmittance"], dtype=float),
+                                           d.shape + (3,))], axis=-1)
+    return evaluate_closures(computed, n0, v, l), evaluate_closures(tabulated, n0, v, l), base, read
 
 
 @pytest.mark.parametrize("name", list(MODES))

@@ -166,6 +166,9 @@ def _interface(group):
     s.description = "Normal n1 of the lower boundary, world space"
     s = iface.new_socket("Upper Normal", in_out="OUTPUT", socket_type="NodeSocketVector")
     s.description = "Normal n0 of the upper boundary (the shading normal used), world space"
+    s = iface.new_socket("Transmittance", in_out="OUTPUT", socket_type="NodeSocketColor")
+    s.description = ("What passes through the layer to the base, per channel: the colour of a clear base's "
+                     "Transparent BSDF")
 
 
 class GroupOps(NodeOps):
@@ -320,8 +323,9 @@ def build_into(group, plan: EffectPlan, layout=None) -> None:
     gout.location = (ops.x0 + (max(ops._rows) + 2) * ops.COLUMN, 0.0)
     group.links.new(total.socket, gout.inputs["BSDF"])
     for name, value in (("Thickness", extras["thickness"]), ("Lower Normal", extras["lower_normal"]),
-                        ("Upper Normal", n0)):
-        group.links.new(value.socket, gout.inputs[name])
+                        ("Upper Normal", n0), ("Transmittance", extras["transmittance"])):
+        if hasattr(value, "socket"):  # else a constant: nothing passes to the base, the output's black
+            group.links.new(value.socket, gout.inputs[name])
     group[STAMP_KEY] = build_stamp()
     group[PLAN_KEY] = plan.key
     if layout is not None:

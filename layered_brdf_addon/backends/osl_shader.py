@@ -37,7 +37,8 @@ SHADER_NAME = "layered_brdf"
 # the node group's sockets are "Base Color", "Base Shader", "Lower Normal", "Upper Normal").
 THICKNESS_INPUT = "ThicknessIn"  # the OSL name of the Thickness input (Thickness is the output's)
 SOCKET_NAMES = {"Base Color": "BaseColor", "Base Shader": "Base", "Lower Normal": "LowerNormal",
-                "Upper Normal": "UpperNormal", "Normal": "Normal", "BSDF": "BSDF", "Thickness": "Thickness"}
+                "Upper Normal": "UpperNormal", "Normal": "Normal", "BSDF": "BSDF", "Thickness": "Thickness",
+                "Transmittance": "Transmittance"}
 
 HEADER = """\
 /* SPDX-License-Identifier: Apache-2.0
@@ -312,6 +313,7 @@ def _parameter_lines() -> list[str]:
         "output float Thickness = 0",
         "output vector LowerNormal = 0",
         "output vector UpperNormal = 0",
+        "output color Transmittance = 0",
     ]
     return lines
 
@@ -384,6 +386,7 @@ def _source(plan: EffectPlan, layout: TableLayout | None = None) -> str:
     ops.raw(f"Thickness = {ops.use(x['thickness'])};")
     ops.raw(f"LowerNormal = {ops.use(x['lower_normal'])};")
     ops.raw(f"UpperNormal = {ops.use(x['upper_normal'])};")
+    ops.raw(f"Transmittance = {ops.use(x['transmittance'])};")
     reserved = {socket_name(s) for s in iter_sockets()} | set(SOCKET_NAMES.values()) | {TABLES_ARRAY}
     main = ops.resolve(body, local_names, reserved=reserved)
     params = ",\n                    ".join(_parameter_lines())

@@ -18,7 +18,7 @@ from ..model.table_bake import table_layout
 from . import osl as osl_backend
 from .animation import animated_parameters, restore_animation, stash_animation
 from .migration import claim, legacy_base_links, link_legacy_base, repair
-from .own_nodes import active_output, stamp
+from .own_nodes import CLEAR_BASE_ADD, active_output, stamp
 from .slots import material_for
 from .sockets import find_socket, held_units, legacy_tint, node_damage, set_inputs, socket_parameter
 from .stored_keys import (AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL, BACKEND_KEY, BASE_CHANNELS, BUILD_KEY,
@@ -110,6 +110,25 @@ def _set_base_inputs(node, params: LayeredParams) -> None:
                 base.inputs[name].default_value = value
 
 
+def _add_clear_base(tree, node, base, transmittance, parent) -> None:
+    """A clear base (a soap film's): the Transparent BSDF ``base`` tinted by ``node``'s Transmittance (what
+    the film passes, channel by channel), added to ``node``'s BSDF by an Add Shader that now feeds whatever
+    the BSDF fed.  Not through the Base Shader input: a Mix Shader takes one factor for all channels."""
+    tree.links.new(transmittance, base.inputs["Color"])
+    add = tree.nodes.new("ShaderNodeAddShader")
+    add.name = add.label = f"{OWN_PREFIX} clear base"
+    add.location = (node.location[0] + 260, node.location[1] - 120)
+    if parent is not None:
+        add.parent = parent
+    stamp(add, CLEAR_BASE_ADD)
+    bsdf = find_socket(node.outputs, "BSDF")
+    targets = [link.to_socket for link in bsdf.links]
+    tree.links.new(bsdf, add.inputs[0])
+    tree.links.new(base.outputs[0], add.inputs[1])
+    for target in targets:
+        tree.links.new(add.outputs[0], target)
+
+
 def _group_lacks_sockets(group) -> bool:
     """Whether the add-on's node group lacks a socket it builds for a parameter, its Thickness input or
     its BSDF output."""
@@ -149,6 +168,9 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
             for link in sock.links:
                 if link.to_node not in own:
                     keep_out.append((sock.name, link.to_socket))
+                elif link.to_node.get(ROLE_KEY) == CLEAR_BASE_ADD:  # what the clear base's Add fed, the BSDF feeds
+                    keep_out += [(sock.name, out_link.to_socket) for out_link in link.to_node.outputs[0].links
+                                 if out_link.to_node not in own]
         name, label, width, parent = old.name, old.label, old.width, old.parent
         location = tuple(old.location)
         old_inputs = [(sock.name, socket_parameter(old, sock)[1]) for sock in old.inputs]
@@ -207,7 +229,11 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
         if parent is not None:
             base.parent = parent
         stamp(base, "base")
-        tree.links.new(base.outputs[0], base_in)
+        transmittance = find_socket(node.outputs, "Transmittance")
+        if spec.node_type == "ShaderNodeBsdfTransparent" and transmittance is not None:
+            _add_clear_base(tree, node, base, transmittance, parent)
+        else:
+            tree.links.new(base.outputs[0], base_in)
     for k, (aov_name, socket_name, kind) in enumerate(((AOV_THICKNESS, "Thickness", "Value"),
                                                        (AOV_LOWER_NORMAL, "Lower Normal", "Color"),
                                                        (AOV_UPPER_NORMAL, "Upper Normal", "Color"))):

@@ -6,7 +6,7 @@ again.
 from __future__ import annotations
 
 from ..model.params import BASE_COLOR_SOCKET, LayeredParams
-from .own_nodes import active_output, pick, shader_node, stamp
+from .own_nodes import CLEAR_BASE_ADD, active_output, pick, shader_node, stamp
 from .sockets import find_socket, legacy_tint
 from .stored_keys import AOVS, BASE_CHANNELS, NAME_KEY, OWN_PREFIX, ROLE_KEY, TEXT_KEY
 
@@ -23,7 +23,10 @@ def _helper_nodes(tree, shader) -> list:
     for group in aovs.values():
         own.append(pick(group, linked_from_shader))
     own += [pick([n for n in tree.nodes if n.get(ROLE_KEY) == "base"],
-                  lambda n: any(l.to_node == shader for s in n.outputs for l in s.links))]
+                  lambda n: any(l.to_node == shader for s in n.outputs for l in s.links),
+                  lambda n: any(l.to_node.get(ROLE_KEY) == CLEAR_BASE_ADD for s in n.outputs for l in s.links))]
+    own += [pick([n for n in tree.nodes if n.get(ROLE_KEY) == CLEAR_BASE_ADD],
+                  lambda n: any(l.from_node == shader for s in n.inputs for l in s.links))]
     if shader is not None and shader.get(ROLE_KEY) is None:  # made before stamps
         for sock in shader.outputs:
             for link in sock.links:

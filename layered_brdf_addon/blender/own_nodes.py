@@ -13,6 +13,9 @@ from ..backends import node_group as node_group_builder
 from .stored_keys import NAME_KEY, ROLE_KEY, SHADER_NODE, TEXT_KEY
 
 _OSL_TEXT = re.compile(r"layered_brdf_.*\.osl")
+#: The role of the Add Shader that adds a clear base (a Transparent BSDF tinted by the shader's
+#: Transmittance, role "base") to the shader's BSDF, between it and what it fed.
+CLEAR_BASE_ADD = "base_add"
 
 
 def carries_shader(node) -> bool:

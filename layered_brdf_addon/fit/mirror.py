@@ -3,8 +3,10 @@
 The reflected, transmitted and interference lobes coincide at the mirror direction of a
 parallel film; with lobes normalised to 1 (``(e + 2) / (2 pi) = 1``) and ``ks = 1`` their
 amplitudes integrated about that direction read as the film's reflectance:
-``(AR + r1^2 AT + r1 AI) / cos_v`` (``AT`` carries the in-layer lobe's ``1 / r1^2``, ``AI``
-the square root of both).  What a spectrophotometer or thin-film optics measures.
+``(AR + r1^2 AT + r1 AI) / cos_v`` with the paper's optics (``AT`` carries the in-layer lobe's
+``1 / r1^2``, ``AI`` the square root of both), ``AR + AT + AI`` with thin-film optics, whose
+energy-keeping lobes carry the reflectance itself.  What a spectrophotometer or thin-film
+optics measures.
 """
 from __future__ import annotations
 
@@ -41,9 +43,10 @@ def mirror_reflectance(params: LayeredParams, theta_deg: float, thickness_nm=Non
     if p.optics == "physical":
         AR, AT, AI = program.film_amplitudes(ops_numpy, r1, lam, e, e, p.ks, p.r0, ops_numpy.triple(*p.r2),
                                              ops_numpy.triple(*p.k2), d, cos_v, *lobes,
-                                             orders=2 if plan.multibeam else 1, **modes)
+                                             orders=program.harmonic_count(plan), **modes)
+        R = AR + AT + AI
     else:
         AR, AT, AI = program.lobe_amplitudes(ops_numpy, r1, lam, e, e, p.ks, p.r0, d, cos_v, *lobes, **modes)
-    R = (AR + r1 * r1 * AT + r1 * AI) / cos_v
+        R = (AR + r1 * r1 * AT + r1 * AI) / cos_v
     out = np.broadcast_to(np.asarray(R, dtype=float), d.shape + (3,)).copy()
     return out[0] if thickness_nm is None else out

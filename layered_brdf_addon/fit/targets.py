@@ -19,10 +19,10 @@ from ..model.plan import EffectPlan
 from ..model.policy import plan_effects
 from ..model.sphere import OrthoCamera, Sun, sphere_geometry
 from . import colour_space
-from .cycles_closures import closure_shading, shade_closures, stack_key, stacked_values
+from .cycles_closures import evaluate_closures, points_shape, shade_closures, stack_key, stacked_values
 from .environment import Environment
 from .mirror import mirror_reflectance
-from .see_through import far_side, see_through
+from .see_through import base_transmittance, far_side, see_through
 
 
 # A sphere is black when fewer of its pixels than this are lit in every view.  Not "no pixel":
@@ -312,16 +312,17 @@ def shade_points(points: dict, params_list: Sequence[LayeredParams], plan: Effec
     if values["base_layer"] != "transparent":
         return shade_film(points, values, plan, noise_at)
     n = len(points["n0"])
-    shaded = shade_film(both_sides(points), values, plan, noise_at)
+    shaded, passed = shade_film(both_sides(points), values, plan, noise_at, transmittance=True)
     front, far = shaded[..., :n, :], shaded[..., n:, :]
-    return front + see_through(values, plan, points["n0"], points["v"], far, points["background"])
+    return front + see_through(passed[..., :n, :], passed[..., n:, :], far, points["background"])
 
 
-def shade_film(points: dict, values: dict, plan: EffectPlan, noise_at=NOISE_MEDIAN) -> np.ndarray:
+def shade_film(points: dict, values: dict, plan: EffectPlan, noise_at=NOISE_MEDIAN, transmittance=False):
     """The film's colours at a set of shading points under its light (what it reflects, no
     see-through), in one run of the program for the stacked ``values``.  ``noise_at``: the
     noise's value where the thickness is a noise pattern, which numpy does not evaluate (its
-    median; a column of levels makes a stack of its own, one row per level, for one set)."""
+    median; a column of levels makes a stack of its own, one row per level, for one set).
+    With ``transmittance``, also what the film passes to a clear base per channel (same shape)."""
     pt = ShadingPoint(socket_values(values, ShadingPoint.SOCKETS), points["n0"], points["v"], points["p_object"])
     P = program.clamped_inputs(pt)
     if plan.thickness == "noise":
@@ -334,9 +335,16 @@ def shade_film(points: dict, values: dict, plan: EffectPlan, noise_at=NOISE_MEDI
     except NoiseUnavailable:
         raise ValueError("normal_mode 'correlated' with the noise pattern needs the render's lower normal") from None
     n0, v = points["n0"], points["v"]
+    res = shade_closures(values, n0, n1, d, v, plan)
     if points.get("environment") is not None:
-        return points["environment"].shade(shade_closures(values, n0, n1, d, v, plan), n0, v, plan.lobe, ng=n0)
-    return points["strength"] * closure_shading(values, n0, n1, d, points["l"], v, ng=n0, plan=plan)
+        colours = points["environment"].shade(res, n0, v, plan.lobe, ng=n0)
+    else:
+        every = np.broadcast_to(n0, points_shape(n0, n1, d, v, values) + (3,))
+        colours = points["strength"] * evaluate_closures(res, every, v, points["l"], plan.lobe, every)
+    if not transmittance:
+        return colours
+    passed = base_transmittance(values, res, np.broadcast_to(n0, np.shape(colours)), v, plan)
+    return colours, np.broadcast_to(passed, colours.shape)
 
 
 CHANNELS = {"r": 0, "g": 1, "b": 2, "red": 0, "green": 1, "blue": 2}

@@ -10,6 +10,9 @@ shader.  The planner never drops an effect that another frame needs.
 """
 from __future__ import annotations
 
+import cmath
+import math
+
 from dataclasses import replace
 from typing import Iterable
 
@@ -36,9 +39,12 @@ INTERFERENCE_CUTOFF_OPTICAL_NM = 4146.0
 DISPERSION_SPREAD = 0.015
 
 # Physical optics: the second harmonic (light bouncing twice inside the layer) is simulated where
-# its amplitude relative to the first, |r01 r12| at normal incidence, exceeds this (a film of high
-# index on a metal: TiO2 on titanium is 0.24; soap 0.02, oil on water 0.01; docs/physical-optics.md).
+# its amplitude relative to the first, |r01 r12|, exceeds this at normal incidence or at the rim
+# (MULTIBEAM_RIM_DEG): a film of high index on a metal (TiO2 on titanium 0.24 at normal incidence),
+# and any film seen near grazing, where both boundaries reflect strongly (soap 0.02 at normal
+# incidence, 0.45 at 80 degrees; docs/physical-optics.md).
 MULTIBEAM_CONTRAST = 0.04
+MULTIBEAM_RIM_DEG = 80.0
 
 #: In the animated names: the shader's Thickness input is linked (its link replaces the pattern).
 THICKNESS_LINKED = "Thickness"
@@ -124,13 +130,25 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
 
 
 def beam_contrast(p: LayeredParams) -> float:
-    """The largest ``|r01 r12|`` over the channels at normal incidence: how much of the light
-    that crossed the layer bounces inside it again, the ratio of each harmonic to the last."""
+    """The largest ``|r01 r12|`` over the channels, at normal incidence and at the rim
+    (:data:`MULTIBEAM_RIM_DEG`, s-polarised light, which both boundaries reflect most): how much
+    of the light that crossed the layer bounces inside it again, the ratio of each harmonic to
+    the last."""
     out = 0.0
+    sin0 = math.sin(math.radians(MULTIBEAM_RIM_DEG))
     for r1, n2, k2 in zip(p.r1, p.r2, p.k2):
         r01 = abs((p.r0 - r1) / (p.r0 + r1))
         r12 = abs(complex(r1 - n2, -k2) / complex(r1 + n2, k2))
         out = max(out, r01 * r12)
+        # At the rim: cosines in the layer and below from Snell's law (complex below a metal, or
+        # under total internal reflection).
+        c0 = math.sqrt(1.0 - sin0 * sin0)
+        c1 = cmath.sqrt(1.0 - (p.r0 * sin0 / r1) ** 2)
+        n2c = complex(n2, k2)
+        c2 = cmath.sqrt(1.0 - (p.r0 * sin0 / n2c) ** 2)
+        rs01 = (p.r0 * c0 - r1 * c1) / (p.r0 * c0 + r1 * c1)
+        rs12 = (r1 * c1 - n2c * c2) / (r1 * c1 + n2c * c2) if abs(r1 * c1 + n2c * c2) > 1e-12 else 1.0
+        out = max(out, abs(rs01 * rs12))
     return out
 
 

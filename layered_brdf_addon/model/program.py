@@ -108,8 +108,11 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     band = dict(band=True, interference=plan.interference, footprint=plan.footprint) if plan.analytic else {}
     b = ops.call("channels" if plan.dispersion else "channels, shared lobes", channel_block, inputs, lobe=plan.lobe,
                  **band, **optics)
-    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"])))
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, ops.components(b["AR"]),
+                                  energy=bool(optics)))
     w = ops.components(b["w_T"])
+    if optics:
+        res.extras["reflected"] = b["reflected"]
     if not plan.dispersion:
         res.glossy.append(Closure("transmit", b["N_T0"], b["e_T"], b["alpha_T"], w, b["aniso_T"], b["U_T0"]))
         return res
@@ -127,7 +130,8 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None) ->
     reads the closures from the material's baked tables, of ``layout`` (:mod:`.shading.tables`).
 
     ``extras`` carries the shader's other outputs: ``thickness`` (nm), ``lower_normal``,
-    ``upper_normal`` (world space) and ``base_weight`` (the factor of the Base Shader input).
+    ``upper_normal`` (world space), ``base_weight`` (the factor of the Base Shader input) and
+    ``transmittance`` (what reaches the base per channel: the colour of a clear base's Transparent BSDF).
     """
     with ops.stage("Inputs, each kept within its range; the upper normal n0"):
         P = clamped_inputs(ops, plan)
@@ -150,6 +154,7 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None) ->
         with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
             inputs = program_inputs(P)
             res = shade(ops, inputs, n0, n1, d, v, plan)
-        res.extras.update(base_weight=passed_to_base(ops, plan, inputs, v, n0))
+        weight, transmittance = passed_to_base(ops, plan, inputs, v, n0, res.extras.get("reflected"))
+        res.extras.update(base_weight=weight, transmittance=transmittance)
     res.extras.update(thickness=d, lower_normal=n1, upper_normal=n0)
     return res

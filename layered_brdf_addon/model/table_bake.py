@@ -19,7 +19,7 @@ from .ops_numpy import ShadingPoint
 from .params import WAVELENGTHS_NM, LayeredParams, iter_sockets, socket_values
 from .plan import EffectPlan
 from .program import shade, tabulated_shade
-from .shading.base_shader import passed_to_base
+from .shading.base_shader import base_receives_light, passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
 from .shading.surface_prelude import tilted_normal
 from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT,
@@ -27,6 +27,8 @@ from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALL
 from .shading.thin_film import harmonic_count
 
 SAMPLES_PER_FRINGE = 24  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
+SAMPLES_PER_HARMONIC_FRINGE = 10  # and per fringe of the highest harmonic of the beams that bounce in the layer
+# (m fringes per fringe of the first; their amplitudes fall as |r01 r12|^m)
 MIN_THICKNESS_SAMPLES = 8
 MAX_TABLE_BYTES = 1 << 20  # a material's tables, at most (float32 RGBA texels)
 MAX_THICKNESS_SAMPLES = 1024
@@ -35,12 +37,14 @@ SHORTEST_NM = 400.0  # the bluest wavelength a plan evaluates (spectral modes re
 
 def _fringe_samples(params: LayeredParams, plan: EffectPlan) -> int:
     """Texels along the thickness that its interference needs: :data:`SAMPLES_PER_FRINGE` per fringe (a
-    fringe is ``lambda / (2 r1)`` of thickness at normal incidence, the shortest; the beams that bounce
-    inside the layer add harmonics), at least :data:`MIN_THICKNESS_SAMPLES`."""
+    fringe is ``lambda / (2 r1)`` of thickness at normal incidence, the shortest), and
+    :data:`SAMPLES_PER_HARMONIC_FRINGE` per fringe of the highest harmonic of the beams that bounce inside
+    the layer, at least :data:`MIN_THICKNESS_SAMPLES`."""
     if not plan.interference:
         return MIN_THICKNESS_SAMPLES
-    fringes = 2.0 * max(params.r1) * abs(params.d_max - params.d_min) / SHORTEST_NM * harmonic_count(plan)
-    return max(math.ceil(SAMPLES_PER_FRINGE * fringes) + 1, MIN_THICKNESS_SAMPLES)
+    fringes = 2.0 * max(params.r1) * abs(params.d_max - params.d_min) / SHORTEST_NM
+    per_fringe = max(SAMPLES_PER_FRINGE, SAMPLES_PER_HARMONIC_FRINGE * harmonic_count(plan))
+    return max(math.ceil(per_fringe * fringes) + 1, MIN_THICKNESS_SAMPLES)
 
 
 def thickness_samples(params: LayeredParams, plan: EffectPlan, row: TableLayout) -> int:
@@ -103,7 +107,7 @@ def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int
     if plan.normals == "tilted":
         n1v = tilted_normal(pt, n0v, ops_numpy.vec(axis), float(P["tilt"]))
     res = shade(pt, inputs, n0v, n1v, d, vv, plan, WAVELENGTHS_NM)
-    return res, passed_to_base(pt, plan, inputs, vv, n0v), frame
+    return res, passed_to_base(pt, plan, inputs, vv, n0v, res.extras.get("reflected")), frame
 
 
 def _is_zero(x) -> bool:
@@ -139,12 +143,22 @@ def table_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
     closures, oriented = _closures(replace(plan, tables=False))
     azimuths = AZIMUTH_SAMPLES if plan.normals == "tilted" else 1
     width = ANGLE_SAMPLES if azimuths > 1 else COS_SAMPLES
-    height = thickness_samples(params, plan, TableLayout(closures, width, 1, azimuths, oriented))
+    height = thickness_samples(params, plan, TableLayout(closures, width, 1, azimuths, oriented,
+                                                         _transmittance_place(plan)))
     needed = 1 if plan.thickness == "constant" else _fringe_samples(params, plan)
     if azimuths > 1 and needed > height:
         raise NotTabulable(f"plan {plan.key}: a tilted boundary's tables for {needed} thickness rows would exceed "
                            f"{MAX_TABLE_BYTES} bytes")
-    return TableLayout(closures, width, height, azimuths, oriented)
+    return TableLayout(closures, width, height, azimuths, oriented, _transmittance_place(plan))
+
+
+def _transmittance_place(plan: EffectPlan) -> str:
+    """Where the tables hold what passes to the base per channel (:class:`TableLayout`)."""
+    if not base_receives_light(plan):
+        return "none"
+    if plan.optics != "physical":
+        return "computed"  # 1 - F(v) per channel, cheaper than a read
+    return "own" if plan.diffuse else "shared"
 
 
 def fits(params: LayeredParams, plan: EffectPlan) -> bool:
@@ -164,7 +178,7 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
     """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, H, image_width, 4),
     a tilted boundary's azimuth slices side by side, each with its edge columns repeated."""
     layout = table_layout(params, plan)
-    res, base, frame = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
+    res, (base, transmittance), frame = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
     shape = (layout.azimuths, layout.height, layout.width)
     out = np.zeros((layout.images, *shape, 4), dtype=np.float32)
 
@@ -196,6 +210,9 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
         for c in range(3):
             out[layout.diffuse_image, ..., c] = _plane(res.diffuse[c], shape)
     out[layout.diffuse_image, ..., 3] = _plane(base, shape)
+    if layout.transmittance in ("shared", "own"):
+        for c, x in enumerate(ops_numpy.components(transmittance)):
+            out[layout.transmittance_image, ..., c] = _plane(x, shape)
     return layout, _stack_slices(out, layout)
 
 

@@ -45,19 +45,42 @@ def base_receives_light(plan) -> bool:
     return plan.optics != "physical" or plan.passes
 
 
-def passed_to_base(ops, plan, inputs, v, n0):
-    """The Base Shader's factor for ``plan``: ``1 - F(v)`` with the paper's optics, the film's
-    :func:`film_transmittance` with thin-film optics, 0 where the lower medium absorbs (a metal
-    keeps what enters it).  ``inputs``: the program's inputs (:func:`.inputs.program_inputs`)."""
+def passed_to_base(ops, plan, inputs, v, n0, reflected=None):
+    """What reaches the base for ``plan``: ``(factor, transmittance)``, the Base Shader's factor (one
+    value: a Mix Shader's) and what passes per channel (the colour of a clear base's Transparent BSDF),
+    :func:`passed_at`, in the shader's stage of that name."""
     if not base_receives_light(plan):
-        return 0.0
+        return 0.0, ops.combine(0.0, 0.0, 0.0)
     with ops.stage("What reaches the Base Shader: " + ("what the film neither reflects nor absorbs"
                                                         if plan.optics == "physical" else "1 - F(v)")):
         cos_v = ops.named("cos_v", ops.clamp(ops.dot(v, n0), 0.0, 1.0))
-        if plan.optics == "physical":
-            passed = film_transmittance(ops, ops.combine(*inputs["r1"]), inputs["r0"], ops.combine(*inputs["r2"]),
-                                        ops.combine(*inputs["k2"]), inputs["kd"], cos_v,
-                                        orders=harmonic_count(plan))
-        else:
-            passed = base_weight(ops, inputs["r1"], inputs["r0"], cos_v)
-        return ops.named("transmitted", passed)
+        weight, passed = passed_at(ops, plan, inputs, cos_v, reflected)
+        return ops.named("transmitted", weight), ops.named("transmittance", passed)
+
+
+def passed_at(ops, plan, inputs, cos_v, reflected=None):
+    """:func:`passed_to_base` at the view's cosine ``cos_v`` to ``n0``.
+
+    The paper's optics: ``1 - F(v)`` per channel, their mean the factor.  Thin-film optics: what the
+    film neither reflects at this incidence (``reflected``, the program's lobes' reflectance per
+    channel, :func:`.channel_program.channel_block`) nor gives to the diffuse part, ``(1 - R)(1 - kd)``,
+    where the lower medium is clear (a metal keeps what enters it): reflected and passed light then add
+    up to what arrives, channel by channel; the factor is the least of the channels, so that an
+    artist's shader of any colour under the film never receives more than passes.
+    ``inputs``: the program's inputs (:func:`.inputs.program_inputs`)."""
+    if not base_receives_light(plan):
+        return 0.0, ops.combine(0.0, 0.0, 0.0)
+    if plan.optics == "physical":
+        passed = base_transmittance(ops, 0.0 if reflected is None else reflected, ops.combine(*inputs["k2"]),
+                                    inputs["kd"])
+        r, g, b = ops.components(passed)
+        return ops.minimum(ops.minimum(r, g), b), passed
+    passed = 1.0 - schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*inputs["r1"]), inputs["r0"]))
+    return base_weight(ops, inputs["r1"], inputs["r0"], cos_v), passed
+
+
+@shader_function
+def base_transmittance(ops, reflected, k2, kd):
+    """Thin-film optics' light under the film per channel: ``(1 - R)(1 - kd)`` where the lower medium is
+    clear (``k2`` below :data:`CLEAR_K`), else 0; ``R`` the film's reflectance at this incidence."""
+    return ops.clamp(1.0 - reflected, 0.0, 1.0) * ops.lt(k2, CLEAR_K) * (1.0 - kd)

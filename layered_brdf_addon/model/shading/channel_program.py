@@ -7,7 +7,7 @@ from __future__ import annotations
 from ..params import WAVELENGTHS_NM
 from .amplitudes import diffuse_rho, film_amplitudes, film_diffuse_rho, lobe_amplitudes
 from .fold import FOLD_BASIS, fold_basis, fold_interference
-from .lobes import closure_tangent, lobe_shape
+from .lobes import INV_2PI, closure_tangent, lobe_shape
 from .placement import lobe_geometry
 from .values import channels, gather, spread
 
@@ -31,11 +31,12 @@ def diffuse_colour(ops, P, d, wavelengths=WAVELENGTHS_NM, band=False, dispersion
     return ops.components(colour)
 
 
-def channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, lobe="beckmann", interference=True):
+def channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, lobe="beckmann", interference=True, energy=False):
     """The lobes of one channel or three (``r1`` a scalar or a triple) as closures would
     place them: :func:`lobe_geometry`, the fold's basis, and per channel the transmitted
     closure's normal ``N_T``, tangent ``U_T``, exponent, alpha, anisotropy and inverse
-    peak (a lobe centred on the direction c is a closure about normalize(v + c))."""
+    peak (a lobe centred on the direction c is a closure about normalize(v + c)); ``energy``: the
+    physical mode's energy-keeping closures (:func:`.lobes.lobe_peak`)."""
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     r_v = n0 * (2.0 * ops.dot(v, n0)) - v
     geo = lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v)
@@ -46,7 +47,8 @@ def channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, lobe="beckmann", interference=
     n = 3 if ops.is_vector(r1) else 1
     normals = [ops.normalize(v + geo[f"l_star{k}"], n0) for k in range(n)]
     mu = spread(ops, gather(ops, [ops.dot(N, v) for N in normals]), r1)
-    inv_peak, alpha, aniso = lobe_shape(ops, mu, geo["eT"], geo["eT_within"], geo["eT_across"], lobe=lobe)
+    inv_peak, alpha, aniso = lobe_shape(ops, mu, geo["eT"], geo["eT_within"], geo["eT_across"], lobe=lobe,
+                                       energy=energy)
     frames = [closure_tangent(ops, N, v, a) for N, a in zip(normals, channels(ops, aniso))]
     out.update(e_T=geo["eT"], alpha_T=alpha, inv_peak_T=inv_peak, aniso_T=gather(ops, [f[1] for f in frames]))
     out.update({f"N_T{k}": N for k, N in enumerate(normals)})
@@ -67,15 +69,21 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, n2=
     channel's band (the analytic mode), with ``footprint`` over the pixel's too; ``optics``:
     the paper's amplitudes or thin-film optics' (:func:`film_amplitudes`, the lower medium
     ``n2 + i k2``, ``orders`` harmonics)."""
-    lobes = channel_lobes(ops, r1 if r1_lobes is None else r1_lobes, e0, e1, r0, n0, n1, v, lobe, interference)
+    lobes = channel_lobes(ops, r1 if r1_lobes is None else r1_lobes, e0, e1, r0, n0, n1, v, lobe, interference,
+                          energy=optics == "physical")
     placed = [spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT]
     modes = dict(interference=interference, band=band, dispersion=r1_lobes is None, footprint=footprint)
     if optics == "physical":
-        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, e1, ks, r0, n2, k2, d, lobes["cos_v"], *placed,
-                                     orders=orders, **modes)
+        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, spread(ops, lobes["e_T"], r1), ks, r0, n2, k2, d,
+                                     lobes["cos_v"], *placed, orders=orders, **modes)
     else:
         AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, lobes["cos_v"], *placed, **modes)
     if interference:
         AR, AT = fold_interference(ops, AR, AT, AI, {k: spread(ops, lobes[k], r1) for k in FOLD_BASIS})
     out = dict(lobes, AR=AR, w_T=AT * spread(ops, lobes["inv_peak_T"], r1))
-    return {k: out[k] for k in ["AR", "w_T", "e_T", "alpha_T", "aniso_T"] + [k for k in out if k[:3] in ("N_T", "U_T")]}
+    keys = ["AR", "w_T", "e_T", "alpha_T", "aniso_T"] + [k for k in out if k[:3] in ("N_T", "U_T")]
+    if optics == "physical":
+        # What the lobes reflect in all, per channel: each amplitude over its lobe's normalised peak.
+        out["reflected"] = AR * (1.0 / ((e0 + 2.0) * INV_2PI)) + AT / ((spread(ops, lobes["e_T"], r1) + 2.0) * INV_2PI)
+        keys.append("reflected")
+    return {k: out[k] for k in keys}

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 from .closures import Closure
+from .energy import energy_peak
 from .step import shader_function
 
 INV_2PI = 0.5 / math.pi
@@ -71,10 +72,15 @@ def glossy_alphas(ops, alpha, aniso):
 
 
 @shader_function
-def lobe_peak(ops, e, a_x, a_y, mu, *, lobe):
+def lobe_peak(ops, e, a_x, a_y, mu, *, lobe, energy=False):
     """The closure's value (light cosine included) at its own mirror direction; ``mu`` is
-    floored at 1e-4 so that the peak and its inverse stay finite at a grazing view."""
+    floored at 1e-4 so that the peak and its inverse stay finite at a grazing view.  With
+    ``energy`` (the physical mode), what a lobe's amplitude is divided by instead: the lobe's
+    normalised peak ``(e + 2)/(2 pi)`` times the closure's own albedo (:mod:`.energy`), so that the
+    closure returns the reflectance its amplitude carries."""
     mu = ops.maximum(mu, 1e-4)
+    if energy:
+        return energy_peak(ops, e, a_x, a_y, mu, lobe=lobe)
     if lobe == "phong":
         # phong_ramp: cosNO (e + 2)/(2 pi) cos^e, which is mu (e + 2)/(2 pi) at the mirror.
         return mu * (e + 2.0) * INV_2PI
@@ -93,21 +99,22 @@ def closure_tangent(ops, N, v, aniso):
 
 
 @shader_function
-def lobe_shape(ops, mu, e, e_within, e_across, *, lobe):
+def lobe_shape(ops, mu, e, e_within, e_across, *, lobe, energy=False):
     """A closure about a normal seen at cosine ``mu`` whose lobe has the Phong exponents
     ``e_within`` and ``e_across``: its alpha, anisotropy and the inverse of its value at
     its centre (a weight that makes the centre's value an amplitude ``A`` is ``A`` times
     that).  ``e``: the round exponent (the geometric mean of the two) that Phong lobes
-    take."""
+    take; ``energy``: see :func:`lobe_peak`."""
     alpha, aniso, a_x, a_y = lobe_alphas(ops, e_within, e_across, mu)
-    return 1.0 / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe), alpha, aniso
+    return 1.0 / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe, energy=energy), alpha, aniso
 
 
-def closure_for(ops, lobe, name, normal, e, v, amplitudes):
-    """A closure about ``normal`` whose value at its centre equals ``amplitudes`` (r, g, b)."""
+def closure_for(ops, lobe, name, normal, e, v, amplitudes, energy=False):
+    """A closure about ``normal`` whose value at its centre equals ``amplitudes`` (r, g, b); with
+    ``energy``, whose albedo equals the reflectance they carry (:func:`lobe_peak`)."""
     mu = ops.named(f"mu_{name}", ops.dot(normal, v))
     alpha, aniso, a_x, a_y = lobe_alphas(ops, e, e, mu)
     tangent, aniso = closure_tangent(ops, normal, v, aniso)
     tangent = ops.named(f"tangent_{name}", tangent)
-    inv = ops.named(f"inv_peak_{name}", 1.0 / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe))
+    inv = ops.named(f"inv_peak_{name}", 1.0 / lobe_peak(ops, e, a_x, a_y, mu, lobe=lobe, energy=energy))
     return Closure(name, normal, e, alpha, tuple(a * inv for a in amplitudes), aniso, tangent)

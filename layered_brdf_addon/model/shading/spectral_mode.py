@@ -11,13 +11,13 @@ from .amplitudes import diffuse_rho, film_amplitudes, film_diffuse_rho, lobe_amp
 from .channel_program import LOBE_PLACEMENT, channel_lobes
 from .closures import Closure, ShadingResult
 from .fold import FOLD_BASIS, fold_weights
-from .lobes import closure_for
+from .lobes import INV_2PI, closure_for
 from .thin_film import optics_settings
 from .values import channels, gather, spread
 
 
 def spectral_step(ops, acc_R, acc_D, acc_T, r1, lam, m, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through,
-                  atten, uR=None, uT=None, uI=None, rRT=None, rRI=None, rTI=None, det=None, n2=None, k2=None,
+                  atten, uR=None, uT=None, uI=None, rRT=None, rRI=None, rTI=None, det=None, n2=None, k2=None, e_T=None,
                   diffuse=True, interference=True, optics="paper", orders=1):
     """One wavelength of the spectral mode, chained: it takes the running sums of the
     reflected, diffuse and its lobe group's transmitted light and returns them updated, so
@@ -41,7 +41,7 @@ def spectral_step(ops, acc_R, acc_D, acc_T, r1, lam, m, e0, e1, ks, r0, d, cos_v
     else:
         out["acc_D"] = acc_D + m * diffuse_rho(ops, r1, r0, lam, d)
     if optics == "physical":
-        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, e1, ks, r0, n2, k2, d, cos_v, cos_ls, cos_ci, tail, through,
+        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, e_T, ks, r0, n2, k2, d, cos_v, cos_ls, cos_ci, tail, through,
                                      atten, interference=interference, orders=orders)
     else:
         AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through, atten,
@@ -125,8 +125,8 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     lead_r1 = gather(ops, [index(leads[g]) for g in order])
     lobes = ops.call("lobe groups", channel_lobes,
                      dict(r1=lead_r1, e0=P["e0"], e1=P["e1"], r0=P["r0"], n0=n0, n1=n1, v=v),
-                     lobe=plan.lobe, interference=plan.interference)
-    per_group = list(LOBE_PLACEMENT + (FOLD_BASIS if plan.interference else ()))
+                     lobe=plan.lobe, interference=plan.interference, energy=bool(optics))
+    per_group = list(LOBE_PLACEMENT + (FOLD_BASIS if plan.interference else ()) + (("e_T",) if optics else ()))
     split = {k: channels(ops, spread(ops, lobes[k], lead_r1)) for k in per_group}
     zero = (0.0, 0.0, 0.0)
     acc_R, acc_D, acc_T = zero, zero, {g: zero for g in order}
@@ -148,7 +148,14 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
         res.diffuse = tuple(P["kd"] * b * x for b, x in zip(P["base"], rgb(acc_D)))
     if not plan.specular:
         return res
-    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(acc_R)))
+    res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(acc_R), energy=bool(optics)))
+    e_T = channels(ops, lobes["e_T"])
+    if optics:
+        # What the lobes reflect in all, per channel: each sum over its lobe's normalised peak.
+        reflected = acc_R * (1.0 / ((P["e0"] + 2.0) * INV_2PI))
+        for slot, g in enumerate(order):
+            reflected = reflected + acc_T[g] / ((e_T[slot] + 2.0) * INV_2PI)
+        res.extras["reflected"] = ops.combine(*rgb(reflected))
     inv_peak = channels(ops, lobes["inv_peak_T"])
     weights = merged_group_weights(ops, [acc_T[g] * inv_peak[slot] for slot, g in enumerate(order)])
     e, alpha, aniso = (channels(ops, lobes[k]) for k in ("e_T", "alpha_T", "aniso_T"))

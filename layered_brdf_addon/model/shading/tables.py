@@ -39,10 +39,13 @@ from dataclasses import dataclass
 from ..plan import EffectPlan
 from .base_shader import base_receives_light
 from .closures import Closure, ShadingResult
+from .fresnel import fresnel_f0, schlick
+from .inputs import program_inputs
 
-TABLE_FORMAT = 4  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
+TABLE_FORMAT = 5  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
 # images; 3: one-channel closures' values packed; 4: a tilted boundary's closure normals in the lower normal's
-# frame); baked tables of another format are rebaked
+# frame; 5: energy-keeping lobes, and what passes to the base per channel); baked tables of another format are
+# rebaked
 COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured: docs/tables.md)
 # A tilted boundary's tables (measured: docs/tables.md#a-tilted-boundary): slices over the view's azimuth
 # about n0 from the lower normal (0..pi), and texels along the view's angle in each.
@@ -99,6 +102,9 @@ class TableLayout:
     height: int
     azimuths: int = 1
     oriented: tuple[int, ...] = ()
+    transmittance: str = "none"  # what passes to the base per channel: "none", "computed" (per point, the
+    # paper's 1 - F(v)), "shared" (in the diffuse image's colour, where the plan has no diffuse part) or "own"
+    # (an image of its own, the last)
 
     def has_image(self, k: int) -> bool:
         """Whether closure ``k`` has an image of its own (it weighs more than one channel)."""
@@ -129,8 +135,13 @@ class TableLayout:
     @property
     def images(self) -> int:
         """Images in all: the closures' own, the diffuse colour's (with the Base Shader's factor), the
-        packed values'."""
-        return self.closure_images + 1 + self.packed_images
+        packed values', and the transmittance's where it has one of its own."""
+        return self.closure_images + 1 + self.packed_images + (self.transmittance == "own")
+
+    @property
+    def transmittance_image(self) -> int:
+        """The image whose colour is what passes to the base per channel."""
+        return self.images - 1 if self.transmittance == "own" else self.diffuse_image
 
     @property
     def diffuse_image(self) -> int:
@@ -252,4 +263,13 @@ def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, axi
     if plan.diffuse:
         res.diffuse = colour
     res.extras["base_weight"] = base if base_receives_light(plan) else 0.0
+    if layout.transmittance == "none":
+        res.extras["transmittance"] = ops.combine(0.0, 0.0, 0.0)
+    elif layout.transmittance == "computed":
+        cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
+        r1 = program_inputs(P)["r1"]
+        res.extras["transmittance"] = 1.0 - schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*r1), P["r0"]))
+    else:
+        res.extras["transmittance"] = colour if layout.transmittance == "shared" else \
+            ops.table(layout.transmittance_image, xy)[0]
     return res
