@@ -33,7 +33,8 @@ OFF = {
     "interference": (BASE.replace(accuracy="spectral16", d_min=THICK, d_max=THICK),
                      lambda plan: plan.interference),
     # A soap-like film over a dielectric: the second harmonic is below MULTIBEAM_CONTRAST.
-    "multibeam": (BASE.replace(optics="physical", r1_r=1.33, r1_g=1.33, r1_b=1.33, r2_r=1.0, r2_g=1.0, r2_b=1.0),
+    # A film barely denser than the air around it: its boundaries reflect little even at the rim.
+    "multibeam": (BASE.replace(optics="physical", r1_r=1.01, r1_g=1.01, r1_b=1.01, r2_r=1.0, r2_g=1.0, r2_b=1.0),
                   lambda plan: plan.multibeam),
     # A metal under the film keeps what enters it: nothing to hand to the Base Shader.
     "passes": (BASE.replace(optics="physical", lower_medium="titanium"), lambda plan: plan.passes),

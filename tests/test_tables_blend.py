@@ -57,7 +57,7 @@ def test_apply_bakes_packed_tables_stamped_as_the_add_on_s():
     group = shader_node(mat).node_tree
     assert group[node_group_builder.PLAN_KEY].endswith("Tb") and "baked tables" in group.name
     images = _images(group)
-    assert len(images) == 4  # reflected, transmitted, diffuse + Base Shader, anisotropies
+    assert len(images) == 5  # reflected, transmitted, diffuse + Base Shader, anisotropies, transmittance
     for image in images:
         assert image.packed_file is not None and image.is_float and image.name.startswith(".")
         assert image.colorspace_settings.name == "Non-Color" and image.alpha_mode == "CHANNEL_PACKED"
@@ -80,7 +80,7 @@ def test_a_change_rebakes_the_same_images_in_place():
     assert shader_node(mat).node_tree == group and _images(group) == images
     assert any(np.abs(_texels(i) - b).max() > 1e-4 for i, b in zip(images, before))
     assert _current(mat)
-    assert len([i for i in bpy.data.images if tables.DIGEST_KEY in i]) == 4  # no leftovers
+    assert len([i for i in bpy.data.images if tables.DIGEST_KEY in i]) == 5  # no leftovers
 
 
 def test_a_tilted_boundary_reads_each_image_at_two_slices_and_rebakes_them_in_place():
@@ -250,4 +250,4 @@ def test_a_change_of_the_row_count_keeps_the_node_s_values_links_and_the_group_s
     assert params_of(mat).ks == pytest.approx(0.4) and _current(mat)
     assert node.inputs["Base Shader"].links[0].from_node == base
     assert len([g for g in bpy.data.node_groups if tables.DIGEST_KEY in g]) == 1
-    assert len([i for i in bpy.data.images if tables.DIGEST_KEY in i]) == 4
+    assert len([i for i in bpy.data.images if tables.DIGEST_KEY in i]) == 5

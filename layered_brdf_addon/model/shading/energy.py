@@ -48,7 +48,7 @@ def _albedo_form(ops, ax, ay, mu, c):
 
 def closure_albedo_numpy(ax, ay, mu, coefficients=None):
     """:func:`closure_albedo` on numpy arrays with the given coefficients (the fit's own use)."""
-    from .. import ops_numpy
+    from .. import ops_numpy  # the numpy backend is not the program's: imported where numpy runs it
 
     c = albedo_coefficients() if coefficients is None else coefficients
     return np.clip(_albedo_form(ops_numpy, np.asarray(ax, float), np.asarray(ay, float), np.asarray(mu, float), c),

@@ -271,5 +271,5 @@ def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, axi
         res.extras["transmittance"] = 1.0 - schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*r1), P["r0"]))
     else:
         res.extras["transmittance"] = colour if layout.transmittance == "shared" else \
-            ops.table(layout.transmittance_image, xy)[0]
+            read(layout.transmittance_image)[0]
     return res
