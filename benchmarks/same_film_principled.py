@@ -4,7 +4,7 @@ Roughness), rendered on the same sphere by Cycles in a white furnace and under B
 mean and rim CIEDE2000 per case and light, and the furnace's value at the centre and the rim.
 
     python benchmarks/same_film_principled.py [--size 64] [--samples 128] [--hdris forest courtyard interior]
-        [--json OUT.json] [--image OUT.png]
+        [--front-only] [--json OUT.json] [--image OUT.png]
 """
 from __future__ import annotations
 
@@ -70,8 +70,22 @@ CASES = (
 )
 
 
-def _render_pair(case: SameFilm, size: int, samples: int, lights: list[str]) -> dict:
-    """Both materials on one sphere under each light: linear RGB images and the sphere's view cosines."""
+def _front_half(sphere) -> None:
+    """Keep the half of ``sphere``'s mesh that faces the camera (which looks along +y): a film seen through
+    shows its far wall too, whose inner side the two materials treat differently."""
+    import bmesh
+
+    bm = bmesh.new()
+    bm.from_mesh(sphere.data)
+    far = [f for f in bm.faces if f.calc_center_median().y > 1e-6]
+    bmesh.ops.delete(bm, geom=far, context="FACES")
+    bm.to_mesh(sphere.data)
+    bm.free()
+
+
+def _render_pair(case: SameFilm, size: int, samples: int, lights: list[str], front_only: bool = False) -> dict:
+    """Both materials on one sphere (or the half that faces the camera) under each light: linear RGB images
+    and the sphere's view cosines."""
     import bpy
 
     from layered_brdf_addon.blender.lookdev import hdri_folder
@@ -84,6 +98,8 @@ def _render_pair(case: SameFilm, size: int, samples: int, lights: list[str]) -> 
     reset_blender()
     cam = camera_for(1, size)
     (sphere,) = build_scene(SceneSpec(camera=cam, centers=((0.0, 0.0, 0.0),), samples=samples))
+    if front_only:
+        _front_half(sphere)
     scene = bpy.context.scene
     scene.cycles.max_bounces = 8
     scene.cycles.transparent_max_bounces = 8
@@ -103,7 +119,7 @@ def _render_pair(case: SameFilm, size: int, samples: int, lights: list[str]) -> 
     return out
 
 
-def measure(size: int = 64, samples: int = 128, hdris=HDRIS, cases=CASES) -> list[dict]:
+def measure(size: int = 64, samples: int = 128, hdris=HDRIS, cases=CASES, front_only: bool = False) -> list[dict]:
     """Per case and light: mean and rim CIEDE2000 between the two materials, and each one's mean at the
     centre (view cosine above 0.8) and the rim (below :data:`RIM_COS`)."""
     from layered_brdf_reference.film_colours import rgb_to_lab
@@ -112,7 +128,7 @@ def measure(size: int = 64, samples: int = 128, hdris=HDRIS, cases=CASES) -> lis
     lights = ["furnace", *hdris]
     rows = []
     for case in cases:
-        got = _render_pair(case, size, samples, lights)
+        got = _render_pair(case, size, samples, lights, front_only)
         mask, mu = got["mask"], got["mu"]
         centre, rim = mask & (mu > 0.8), mask & (mu < RIM_COS) & (mu > 0.02)
         for light in lights:
@@ -166,8 +182,10 @@ def main(argv=None) -> None:
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--image", type=Path, default=None)
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--front-only", action="store_true", help="the half of the sphere that faces the camera: "
+                    "no far wall seen through a clear film")
     args = ap.parse_args(argv)
-    rows = measure(args.size, args.samples, args.hdris)
+    rows = measure(args.size, args.samples, args.hdris, front_only=args.front_only)
     head = ["case", "light", "mean ΔE2000", "rim ΔE2000", "layered centre", "layered rim", "Principled centre",
             "Principled rim"]
     print(table(head, [[r["case"], r["light"], f"{r['mean_de']:.2f}", f"{r['rim_de']:.2f}",

@@ -73,7 +73,17 @@ def preset_row(request):
             # The closure form holds the layer, not what the add-on puts under it (a transparent
             # film shows the sphere's far wall through it, a metal base its own reflection): the
             # layer is compared over an empty base.
-            base = find_socket(shader_node(obj.active_material).inputs, "Base Shader")  # group or OSL name
+            # A clear base is a Transparent BSDF tinted by the shader's Transmittance, added after it:
+            # turned black, it adds nothing.
+            shader = shader_node(obj.active_material)
+            if base_layer.node_type == "ShaderNodeBsdfTransparent":
+                (link,) = find_socket(shader.outputs, "Transmittance").links
+                clear = link.to_node
+                assert clear.bl_idname == base_layer.node_type
+                obj.active_material.node_tree.links.remove(link)
+                clear.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+                continue
+            base = find_socket(shader.inputs, "Base Shader")  # group or OSL name
             assert [link.from_node.bl_idname for link in base.links] == [base_layer.node_type]
             obj.active_material.node_tree.links.remove(base.links[0])
     passes = render_passes_osl() if backend == "osl" else render_passes()

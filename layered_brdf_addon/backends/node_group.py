@@ -158,7 +158,8 @@ def _interface(group):
         s.max_value = min(hi, 3.0e38)
         s.description = P_.socket_tooltip(spec)
     s = iface.new_socket("Base Shader", in_out="INPUT", socket_type="NodeSocketShader", parent=panels["Diffuse"])
-    s.description = "Your own material under the layer; it receives what the top boundary transmits, 1 - F"
+    s.description = ("Your own material under the layer; it receives what the layer passes on (thin-film optics: "
+                     "in the channel where it passes least; the paper's: 1 - F)")
     iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
     s = iface.new_socket("Thickness", in_out="OUTPUT", socket_type="NodeSocketFloat")
     s.description = "Layer thickness d in nm"

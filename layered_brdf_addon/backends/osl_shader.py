@@ -370,7 +370,8 @@ def _source(plan: EffectPlan, layout: TableLayout | None = None) -> str:
         ops.raw(f"float {TABLES_ARRAY}[{n}] = {{{_TABLES_PLACEHOLDER}}};")
     res, local_names = run_capturing_locals(program.layered_surface, ops, {}, {"plan": plan, "layout": layout})
     x = res.extras
-    ops.raw("/* The artist's own shader under the layer receives what the top transmits, 1 - F(v). */")
+    ops.raw("/* The artist's own shader under the layer receives what the layer passes on: 1 - F(v) with the "
+            "paper's optics, with thin-film optics what the film passes in the channel where it passes least. */")
     ops.raw(f"BSDF = {ops.use(x['base_weight'], 14)} * Base;")
     if res.diffuse is not None:
         ops.raw("/* Eqs. 14-18: a Lambertian closure about n0 tinted by kd base rho_d. */")

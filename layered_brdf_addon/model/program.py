@@ -40,7 +40,7 @@ from __future__ import annotations
 from .params import WAVELENGTHS_NM
 from .plan import EffectPlan
 from .shading.amplitudes import diffuse_rho, film_amplitudes, film_diffuse_rho, lobe_amplitudes
-from .shading.base_shader import CLEAR_K, base_weight, film_transmittance, passed_to_base
+from .shading.base_shader import CLEAR_K, base_transmittance, base_weight, passed_at, passed_to_base
 from .shading.channel_program import LOBE_PLACEMENT, channel_block, channel_lobes, diffuse_colour
 from .shading.closures import Closure, ShadingResult
 from .shading.fold import FOLD_BASIS, FOLD_RIDGE, fold_basis, fold_interference, fold_weights, lobe_correlation
@@ -75,7 +75,7 @@ __all__ = [
     "pattern_thickness", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient",
     "tilt_axis", "tilt_axis_about", "tilted_normal",
     "FLOAT_LIMIT", "clamped_inputs", "direction_input", "program_inputs", "CLEAR_K", "base_weight",
-    "film_transmittance", "passed_to_base", "TableLayout", "tabulated_shade", "shade", "layered_surface",
+    "base_transmittance", "passed_at", "passed_to_base", "TableLayout", "tabulated_shade", "shade", "layered_surface",
 ]
 
 
