@@ -7,7 +7,8 @@ from __future__ import annotations
 from ..params import WAVELENGTHS_NM
 from .amplitudes import diffuse_rho, film_amplitudes, film_diffuse_rho, lobe_amplitudes
 from .fold import FOLD_BASIS, fold_basis, fold_interference
-from .lobes import INV_2PI, closure_tangent, lobe_shape
+from .energy import carried
+from .lobes import closure_tangent, lobe_shape
 from .placement import lobe_geometry
 from .values import channels, gather, spread
 
@@ -83,7 +84,7 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, n2=
     out = dict(lobes, AR=AR, w_T=AT * spread(ops, lobes["inv_peak_T"], r1))
     keys = ["AR", "w_T", "e_T", "alpha_T", "aniso_T"] + [k for k in out if k[:3] in ("N_T", "U_T")]
     if optics == "physical":
-        # What the lobes reflect in all, per channel: each amplitude over its lobe's normalised peak.
-        out["reflected"] = AR * (1.0 / ((e0 + 2.0) * INV_2PI)) + AT / ((spread(ops, lobes["e_T"], r1) + 2.0) * INV_2PI)
+        # What the lobes reflect in all, per channel.
+        out["reflected"] = carried(ops, AR, e0) + carried(ops, AT, spread(ops, lobes["e_T"], r1))
         keys.append("reflected")
     return {k: out[k] for k in keys}

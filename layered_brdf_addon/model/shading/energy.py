@@ -79,6 +79,12 @@ def phong_lobe_albedo(ops, e, mu):
     return ops.clamp(b * cdf + s * pdf, 1e-4, 1.0)
 
 
+def carried(ops, amplitude, e):
+    """The reflectance an energy-keeping lobe of exponent ``e`` carries: its amplitude over its normalised
+    peak ``(e + 2)/(2 pi)``."""
+    return amplitude / ((e + 2.0) * INV_2PI)
+
+
 def energy_peak(ops, e, a_x, a_y, mu, *, lobe):
     """The value at its centre (light cosine included) of a closure of unit weight that carries
     unit albedo, per unit of the lobe's normalised peak ``(e + 2)/(2 pi)``: the closure's albedo

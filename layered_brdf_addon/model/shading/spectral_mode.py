@@ -11,7 +11,8 @@ from .amplitudes import diffuse_rho, film_amplitudes, film_diffuse_rho, lobe_amp
 from .channel_program import LOBE_PLACEMENT, channel_lobes
 from .closures import Closure, ShadingResult
 from .fold import FOLD_BASIS, fold_weights
-from .lobes import INV_2PI, closure_for
+from .energy import carried
+from .lobes import closure_for
 from .thin_film import optics_settings
 from .values import channels, gather, spread
 
@@ -151,10 +152,10 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(acc_R), energy=bool(optics)))
     e_T = channels(ops, lobes["e_T"])
     if optics:
-        # What the lobes reflect in all, per channel: each sum over its lobe's normalised peak.
-        reflected = acc_R * (1.0 / ((P["e0"] + 2.0) * INV_2PI))
+        # What the lobes reflect in all, per channel.
+        reflected = carried(ops, acc_R, P["e0"])
         for slot, g in enumerate(order):
-            reflected = reflected + acc_T[g] / ((e_T[slot] + 2.0) * INV_2PI)
+            reflected = reflected + carried(ops, acc_T[g], e_T[slot])
         res.extras["reflected"] = ops.combine(*rgb(reflected))
     inv_peak = channels(ops, lobes["inv_peak_T"])
     weights = merged_group_weights(ops, [acc_T[g] * inv_peak[slot] for slot, g in enumerate(order)])
