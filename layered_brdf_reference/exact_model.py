@@ -179,7 +179,9 @@ def specular_terms(i, o, n0, n1, r1, d, e0, e1, r0=1.0, wavelengths=WAVELENGTHS_
     through = refracts & (ti_n1 < 0.0) & (to_n1 < 0.0) & ok[..., None]  # eq. 11
     if optics == "physical":
         rti_n0 = -s_i - 2.0 * ti_n1 * n0_n1[..., None]  # <r_ti, n0>: the transmitted lobe's centre
-        return _film_terms(cos_l, cos_v, c_r, np.where(through, c_t, 0.0), s_i, s_o, r1, d, e0, e1, r0, lam, band,
+        # The microfacet that mirrors the light into o: its cosine to the light, half the angle between them.
+        cos_h = np.sqrt(np.clip((1.0 - np.where(ok, i_o, 1.0)) * 0.5, 0.0, 1.0))[..., None]
+        return _film_terms(cos_l, cos_v, c_r, np.where(through, c_t, 0.0), cos_h, r1, d, e0, e1, r0, lam, band,
                            n2, k2, orders, rti_n0)
 
     # Transmitted part, eqs. 9-10, lobe normalised by (e1 + 2) / (2 pi r1^2) (SPEC).
@@ -207,8 +209,12 @@ def _channel_values(x, shape):
     return ops_numpy.vec(a) if shape[-1] == 3 else a
 
 
-def _film_terms(cos_l, cos_v, c_r, c_t, s_i, s_o, r1, d, e0, e1, r0, lam, band, n2, k2, orders, rti_n0):
+def _film_terms(cos_l, cos_v, c_r, c_t, cos_h, r1, d, e0, e1, r0, lam, band, n2, k2, orders, rti_n0):
     """The physical mode's terms of :func:`specular_terms` (see there), per channel.
+
+    The film's optics (its reflectances, the beams' phases and the path through it) are taken at the
+    microfacet that mirrors the light into ``o`` (``cos_h``: its cosine to the light), as a rough film
+    reflects; for a smooth film, at the mirror direction, that is the light's own angle.
 
     Energy-keeping lobes: each lobe is divided by its own directional albedo at the light's
     incidence (:mod:`.lobe_albedo`: the reflected lobe's about the mirror direction, clipped at the
@@ -217,13 +223,15 @@ def _film_terms(cos_l, cos_v, c_r, c_t, s_i, s_o, r1, d, e0, e1, r0, lam, band, 
     boundary's reflectance ``R01`` and the transmitted lobe the beams' share ``T`` at every incidence
     and roughness, and a film that absorbs nothing, over a clear base, returns all the light with
     what the base passes."""
-    shape = np.broadcast_shapes(np.shape(cos_l), np.shape(r1), np.shape(s_i), np.shape(d))
+    shape = np.broadcast_shapes(np.shape(cos_l), np.shape(r1), np.shape(cos_h), np.shape(d))
 
     def v(x):
         return _channel_values(x, shape)
 
     r1v, n2v, k2v = v(r1), v(n2), v(k2)
-    f = film_beams(ops_numpy, v(cos_l), v(s_i), r1v, r0, n2v, k2v, orders=orders)
+    eta = r0 / np.asarray(r1, dtype=float)
+    s_h = np.sqrt(np.maximum(1.0 - eta * eta * (1.0 - cos_h * cos_h), 0.0))  # in the layer, under the microfacet
+    f = film_beams(ops_numpy, v(cos_h), v(s_h), r1v, r0, n2v, k2v, orders=orders)
     R01, Tb = np.asarray(f["R01"]), np.asarray(f["T"])
     R = R01 * phong_norm(e0) * phong_lobe(c_r, e0) / np.maximum(reflected_albedo(e0, cos_l), 1e-6)
     # The beams leave through the top boundary at the view, not at the light.
@@ -232,7 +240,7 @@ def _film_terms(cos_l, cos_v, c_r, c_t, s_i, s_o, r1, d, e0, e1, r0, lam, band, 
     shape_t = layer_albedo(e1, r0 / np.asarray(r1, dtype=float), np.broadcast_to(rti_n0, shape)) / np.maximum(
         1.0 - R01_l, 1e-6)
     T = Tb * leave * (phong_norm(e1) / (r1 * r1)) * phong_lobe(c_t, e1) / np.maximum(shape_t, 1e-6)
-    opd, slope = interference_path(ops_numpy, r1, d, s_i, s_o)
+    opd, slope = interference_path(ops_numpy, r1, d, s_h, s_h)
     phase = np.pi * opd / lam
     waves = np.asarray(harmonics(ops_numpy, f, v(lam), v(opd), v(slope), r1v, orders, band=band, dispersion=True,
                                  footprint=False))

@@ -19,6 +19,7 @@ from ..model.params import WAVELENGTHS_NM, LayeredParams
 from ..model.policy import plan_effects
 
 UNIT_LOBE_EXPONENT = 2.0 * math.pi - 2.0  # (e + 2) / (2 pi) = 1
+SMOOTH_FACETS = 1.0e12  # the exponent of a smooth boundary's microfacets: they face the view's normal
 
 
 def smooth_film(params: LayeredParams) -> LayeredParams:
@@ -41,7 +42,8 @@ def mirror_reflectance(params: LayeredParams, theta_deg: float, thickness_nm=Non
     modes = dict(interference=plan.interference, band=plan.analytic, dispersion=plan.dispersion, footprint=False)
     lam = ops_numpy.triple(*WAVELENGTHS_NM)
     if p.optics == "physical":
-        AR, AT, AI = program.film_amplitudes(ops_numpy, r1, lam, e, e, p.ks, p.r0, ops_numpy.triple(*p.r2),
+        AR, AT, AI = program.film_amplitudes(ops_numpy, r1, lam, e, e, SMOOTH_FACETS, p.ks, p.r0,
+                                             ops_numpy.triple(*p.r2),
                                              ops_numpy.triple(*p.k2), d, cos_v, *lobes,
                                              orders=program.harmonic_count(plan), **modes)
         R = AR + AT + AI

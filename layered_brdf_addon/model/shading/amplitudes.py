@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+from .energy import microfacet_cosine
 from .fresnel import fresnel_f0, schlick, transmission_factor
 from .interference import band_cosine, harmonics, interference_path
 from .lobes import INV_2PI
@@ -50,14 +51,15 @@ def lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail
 
 
 @shader_function
-def film_amplitudes(ops, r1, lam, e0, eT, ks, r0, n2, k2, d, cos_v, cos_ls, cos_ci, tail, through, atten, *,
+def film_amplitudes(ops, r1, lam, e0, eT, e_facets, ks, r0, n2, k2, d, cos_v, cos_ls, cos_ci, tail, through, atten, *,
                     interference=True, band=False, dispersion=True, footprint=False, orders=1):
     """:func:`lobe_amplitudes` with thin-film optics (the physical mode): the reflected lobe
     carries the top boundary's exact reflectance, the transmitted lobe what the lower
     boundary reflects back through the top one (all its bounces), the interference lobe the
     harmonics of :func:`film_beams` with their reflection phases.  The film's optics are taken
-    at the view's angle; the transmitted lobe's light side crosses the top boundary at its
-    own angle (``cos_ls``).
+    at the microfacets' angle to the view (:func:`.energy.microfacet_cosine` of the top boundary's
+    exponent ``e_facets``: a rough film reflects through microfacets less grazing than the view);
+    the transmitted lobe's light side crosses the top boundary at its own angle (``cos_ls``).
 
     Energy-keeping lobes (:mod:`.energy`): each amplitude is the reflectance its lobe carries
     times the lobe's normalised peak ``(e + 2)/(2 pi)`` (``eT``: the transmitted lobe's exponent
@@ -66,16 +68,19 @@ def film_amplitudes(ops, r1, lam, e0, eT, ks, r0, n2, k2, d, cos_v, cos_ls, cos_
     of the two (eq. 5), is ``2 cos sqrt(A_R A_T)`` attenuated by their distance."""
     eta = r0 / r1
     eta2 = eta * eta
-    s_o = ops.sqrt(ops.maximum((1.0 - eta2) + eta2 * (cos_v * cos_v), 0.0))  # <t_o, -n0>
-    f = film_beams(ops, cos_v, s_o, r1, r0, n2, k2, orders=orders)
+    cos_f = microfacet_cosine(ops, e_facets, cos_v)
+    s_o = ops.sqrt(ops.maximum((1.0 - eta2) + eta2 * (cos_f * cos_f), 0.0))  # <t_o, -m>, m a microfacet's normal
+    f = film_beams(ops, cos_f, s_o, r1, r0, n2, k2, orders=orders)
     AR = f["R01"] * (ks * (e0 + 2.0) * INV_2PI)
     # The transmitted beams cross the top boundary at l*, not at the view: (1 - R01(l*)) / (1 - R01(v)).
-    cross = (1.0 - fresnel_reflectance(ops, cos_ls, eta)) / ops.maximum(1.0 - f["R01"], 1e-6)
+    cross = (1.0 - fresnel_reflectance(ops, microfacet_cosine(ops, e_facets, cos_ls), eta)) / \
+        ops.maximum(1.0 - f["R01"], 1e-6)
     AT_amp = f["T"] * cross * tail * (ks * (eT + 2.0) * INV_2PI)
     AT = ops.select(through, AT_amp, 0.0)
     if not interference:
         return AR, AT, 0.0  # averaged over the band: the cosines have mean 0
-    s_i = ops.sqrt((1.0 - eta2) + eta2 * (cos_ci * cos_ci))
+    cos_fi = microfacet_cosine(ops, e_facets, cos_ci)
+    s_i = ops.sqrt((1.0 - eta2) + eta2 * (cos_fi * cos_fi))
     opd, slope = interference_path(ops, r1, d, s_i, s_o)
     wave = harmonics(ops, f, lam, opd, slope, r1, orders, band=band, dispersion=dispersion, footprint=footprint)
     AI = ops.select(through, wave * ops.sqrt(AR * AT_amp) * (atten * 2.0), 0.0)

@@ -75,7 +75,7 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, n2=
     placed = [spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT]
     modes = dict(interference=interference, band=band, dispersion=r1_lobes is None, footprint=footprint)
     if optics == "physical":
-        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, spread(ops, lobes["e_T"], r1), ks, r0, n2, k2, d,
+        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, spread(ops, lobes["e_T"], r1), e0, ks, r0, n2, k2, d,
                                      lobes["cos_v"], *placed, orders=orders, **modes)
     else:
         AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, lobes["cos_v"], *placed, **modes)

@@ -79,6 +79,25 @@ def phong_lobe_albedo(ops, e, mu):
     return ops.clamp(b * cdf + s * pdf, 1e-4, 1.0)
 
 
+# The mean cosine between a view and the microfacet normals it sees (microfacet_cosine): fitted to Beckmann's
+# visible normals by quadrature (layered_brdf_reference/lobe_albedo.visible_cosine).
+FACET_COEFFICIENTS = (0.8834, 1.1232, 0.3089)
+
+
+@shader_function
+def microfacet_cosine(ops, e, mu):
+    """The mean cosine between the view, at cosine ``mu`` to the normal, and the normals of the microfacets
+    it sees on a boundary whose lobe has the Phong exponent ``e`` (Beckmann ``alpha^2 = 2 / (4 e + 2)``): the
+    angle at which a rough boundary's microfacets reflect on average, less grazing than the view near the
+    rim.  ``sqrt(mu^2 + (c0 alpha)^2 (1 - mu^2)^c2) / sqrt(1 + c1 alpha^2)``, within 0.031 of the
+    quadrature for alphas up to 0.4, 0.072 up to 1; ``mu`` for a smooth boundary."""
+    c0, c1, c2 = FACET_COEFFICIENTS
+    a2 = 2.0 / (4.0 * ops.maximum(e, 0.0) + 2.0)
+    sin2 = ops.maximum(1.0 - mu * mu, 1e-12)
+    spread = ops.power(sin2, c2) * (a2 * (c0 * c0))
+    return ops.clamp(ops.sqrt((mu * mu + spread) / (1.0 + c1 * a2)), 0.0, 1.0)
+
+
 def carried(ops, amplitude, e):
     """The reflectance an energy-keeping lobe of exponent ``e`` carries: its amplitude over its normalised
     peak ``(e + 2)/(2 pi)``."""

@@ -42,7 +42,7 @@ def spectral_step(ops, acc_R, acc_D, acc_T, r1, lam, m, e0, e1, ks, r0, d, cos_v
     else:
         out["acc_D"] = acc_D + m * diffuse_rho(ops, r1, r0, lam, d)
     if optics == "physical":
-        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, e_T, ks, r0, n2, k2, d, cos_v, cos_ls, cos_ci, tail, through,
+        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, e_T, e0, ks, r0, n2, k2, d, cos_v, cos_ls, cos_ci, tail, through,
                                      atten, interference=interference, orders=orders)
     else:
         AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through, atten,
