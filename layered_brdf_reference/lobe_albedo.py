@@ -116,6 +116,45 @@ def layer_lobe_albedo(e1, eta, c, n: int = 128, m_phi: int = 64) -> np.ndarray:
     return (e1 + 2.0) / (2.0 * np.pi * (e1 + 1.0)) * np.einsum("...k,k->...", ring, w)
 
 
+def visible_cosine(alpha, mu, n: int = QUADRATURE) -> np.ndarray:
+    """The mean cosine between a view at cosine ``mu`` to the normal and the normals of the microfacets it
+    sees on an isotropic Beckmann surface of ``alpha``: the average of ``v.h`` weighted by ``max(v.h, 0) D(h)``
+    (the visible normals' density, over ``D cos theta_h``, which the slopes sample)."""
+    from scipy.special import ndtri
+
+    alpha, mu = np.broadcast_arrays(np.asarray(alpha, dtype=float), np.asarray(mu, dtype=float))
+    u, w = _legendre01(n)
+    q = ndtri(u) / math.sqrt(2.0)
+    ww = np.outer(w, w)
+    out = np.empty(alpha.shape)
+    for idx in np.ndindex(alpha.shape):
+        a, m = max(alpha[idx], 1e-5), min(max(mu[idx], 0.0), 1.0)
+        sx, sy = q[:, None] * a, q[None, :] * a
+        hz = 1.0 / np.sqrt(1.0 + sx * sx + sy * sy)
+        vh = -sy * hz * math.sqrt(1.0 - m * m) + hz * m
+        seen = ww * np.maximum(vh, 0.0) / hz
+        out[idx] = float((seen * vh).sum() / seen.sum())
+    return out
+
+
+def fit_microfacet_cosine() -> tuple[np.ndarray, float]:
+    """Least-squares fit of :func:`layered_brdf_addon.model.shading.energy.microfacet_cosine`'s three
+    coefficients to :func:`visible_cosine` over alphas 0.003-1 and cosines 0.01-1: the coefficients and the
+    largest error."""
+    from scipy.optimize import least_squares
+
+    alpha = np.array([0.003, 0.01, 0.03, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.7, 1.0])[:, None]
+    mu = np.array([1.0, 0.9, 0.7, 0.5, 0.4, 0.3, 0.2, 0.15, 0.1, 0.07, 0.05, 0.03, 0.02, 0.01])[None, :]
+    want = visible_cosine(alpha, mu)
+
+    def form(c):
+        return np.sqrt(mu * mu + (c[0] * alpha) ** 2 * np.maximum(1.0 - mu * mu, 1e-12) ** c[2]) / \
+            np.sqrt(1.0 + c[1] * alpha * alpha)
+
+    sol = least_squares(lambda c: (form(c) - want).ravel(), [0.9, 0.9, 1.0])
+    return sol.x, float(np.abs(form(sol.x) - want).max())
+
+
 # --------------------------------------------------------------------------
 # The closed form of Cycles' Beckmann albedo that the shaders evaluate.
 FIT_SAMPLES = 3000
