@@ -32,7 +32,7 @@ EXT_ZIP = dist/layered_brdf-$(shell sed -n 's/^version *= *"\(.*\)"/\1/p' blende
 WHICH = $(PY) -c "import importlib.metadata as m, platform; \
     print('Blender', m.version('bpy'), '(bpy) on Python', platform.python_version(), 'in $(VENV)')"
 
-.PHONY: demo test bench bench-scene gpu-check extension clean which generated band-fit looks-sheet
+.PHONY: demo test bench bench-scene gpu-check extension clean which generated band-fit albedo-fit looks-sheet
 
 $(STAMP): pyproject.toml
 	@test -n "$(PYTHON)" || { echo "Blender $(BLENDER) needs Python $(if $(filter 5.2,$(BLENDER)),3.13,3.11), not found" >&2; exit 1; }
@@ -60,6 +60,10 @@ generated: $(STAMP)
 # Refit the analytic mode's closed form (model/data/band_fit.json) from the CIE tables, a few minutes.
 band-fit: $(STAMP)
 	$(PY) -m layered_brdf_reference.band_fitting
+
+# Refit the closed form of Cycles' Beckmann closure's albedo (model/data/closure_albedo.json), seconds.
+albedo-fit: $(STAMP)
+	$(PY) -m layered_brdf_reference.lobe_albedo
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_reference.py
