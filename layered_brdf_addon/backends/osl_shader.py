@@ -59,7 +59,10 @@ HEADER = """\
  *     costs less).
  *
  * Each lobe amplitude is the pixel value per unit irradiance at the lobe's centre; it
- * becomes a closure weight by dividing by the closure's own value there.  The diffuse
+ * becomes a closure weight by dividing by the closure's own value there.  With thin-film
+ * optics a lobe carries a reflectance instead, and its closure's weight is that
+ * reflectance over the closure's own albedo: the closure returns, over the hemisphere,
+ * what the film reflects at that angle (energy-keeping lobes).  The diffuse
  * part is eqs. 14-18 on a diffuse closure about n0.  Cycles' I points towards the viewer
  * (the program's v, named V here: v is an OSL global).  Thickness d is in nanometres.
  *
