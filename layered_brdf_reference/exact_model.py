@@ -237,7 +237,7 @@ def _film_terms(cos_l, cos_v, c_r, c_t, cos_h, r1, d, e0, e1, r0, lam, band, n2,
     # The beams leave through the top boundary at the view, not at the light.
     R01_l = np.asarray(fresnel_reflectance(ops_numpy, v(cos_l), r0 / r1v))
     leave = (1.0 - np.asarray(fresnel_reflectance(ops_numpy, v(cos_v), r0 / r1v))) / np.maximum(1.0 - R01_l, 1e-6)
-    shape_t = layer_albedo(e1, r0 / np.asarray(r1, dtype=float), np.broadcast_to(rti_n0, shape)) / np.maximum(
+    shape_t = layer_albedo(e1, eta, np.broadcast_to(rti_n0, shape)) / np.maximum(
         1.0 - R01_l, 1e-6)
     T = Tb * leave * (phong_norm(e1) / (r1 * r1)) * phong_lobe(c_t, e1) / np.maximum(shape_t, 1e-6)
     opd, slope = interference_path(ops_numpy, r1, d, s_h, s_h)

@@ -116,15 +116,6 @@ def conformal_film(film: str, below: str, thickness_nm, roughness: float = ALBED
     return p.replace(e0=e0, e1=e0 * p.r1[1] ** 2, kd=0.0)
 
 
-def _closure_shading(params, n0, n1, d, l, v):
-    from layered_brdf_addon.model.policy import plan_effects
-
-    from .closures import evaluate_closures, shade_closures
-
-    res = shade_closures(params, n0, n1, d, v, plan_effects(params))
-    return evaluate_closures(res, n0, v, l, params.lobe)
-
-
 def _exact_outgoing(params, n0, n1, d, o, light):
     """``f(i, o) <n0, o>`` with the light arriving from ``light`` (its direction, away from the surface):
     integrated over the sampled ``o``, the exact model's directional albedo at that incidence."""
@@ -143,6 +134,7 @@ def directional_albedo(film: str, below: str, thickness_nm, theta_deg: float, fo
     integrated over the light's directions for the view at ``theta_deg`` (what a white furnace renders);
     ``"exact"``: the exact model integrated over the outgoing directions for light from ``theta_deg``.
     Monte Carlo (:func:`.lighting.environment_shading`), the same samples for every thickness."""
+    from .closures import closure_shading
     from .lighting import environment_shading
 
     d = np.atleast_1d(np.asarray(thickness_nm, dtype=float))
@@ -150,5 +142,5 @@ def directional_albedo(film: str, below: str, thickness_nm, theta_deg: float, fo
     n = np.tile([0.0, 0.0, 1.0], (d.size, 1))
     t = math.radians(theta_deg)
     v = np.array([math.sin(t), 0.0, math.cos(t)])
-    shading = _closure_shading if form == "closures" else _exact_outgoing
+    shading = closure_shading if form == "closures" else _exact_outgoing
     return environment_shading(p, n, n, d, v, samples=samples, seed=seed, shading=shading)

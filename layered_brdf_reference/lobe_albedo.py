@@ -26,7 +26,9 @@ import math
 import numpy as np
 
 from layered_brdf_addon.fit.cycles_closures import _lambda_from
+from layered_brdf_addon.model import ops_numpy
 from layered_brdf_addon.model.shading.energy import ALBEDO_PATH, closure_albedo_numpy
+from layered_brdf_addon.model.shading.thin_film import fresnel_reflectance
 
 QUADRATURE = 64  # Gauss-Legendre nodes per axis
 
@@ -89,6 +91,16 @@ def phong_albedo(e, mu, n: int = 256) -> np.ndarray:
     return (e + 2.0) / (2.0 * np.pi * (e + 1.0)) * np.einsum("...k,k->...", ring, w)
 
 
+def _leaving(cos1, eta):
+    """``(1 - R01) cos theta_1`` for in-layer directions at cosine ``cos1`` to the normal that leave through
+    the top boundary (inside the critical cone), else 0: the top boundary's Fresnel reflectance of the
+    shading program, from outside at the cosine the direction leaves at (``eta = r0 / r1``)."""
+    k = 1.0 - (1.0 - cos1 * cos1) / (eta * eta)  # cos^2 of the outside direction
+    cos0 = np.sqrt(np.maximum(k, 0.0))
+    trans = 1.0 - np.asarray(fresnel_reflectance(ops_numpy, cos0, eta))
+    return np.where((k > 0.0) & (cos1 > 0.0), trans * cos1, 0.0)
+
+
 def layer_lobe_albedo(e1, eta, c, n: int = 128, m_phi: int = 64) -> np.ndarray:
     """What the transmitted lobe returns outside per unit of its coefficient, before the
     ``1 / (1 - R01(l))`` of its light's entry: ``(e1 + 2)/(2 pi r1^2) int cos^e1(alpha) (1 - R01(o))
@@ -103,16 +115,7 @@ def layer_lobe_albedo(e1, eta, c, n: int = 128, m_phi: int = 64) -> np.ndarray:
     t = s ** (1.0 / (e1[..., None, None] + 1.0))
     cc = np.clip(c[..., None, None], -1.0, 1.0)
     cos1 = cc * t + np.sqrt(1.0 - cc * cc) * np.sqrt(np.maximum(1.0 - t * t, 0.0)) * np.cos(phi)[:, None]
-    et = eta[..., None, None]
-    k = 1.0 - (1.0 - cos1 * cos1) / (et * et)  # cos^2 of the outside direction
-    cos0 = np.sqrt(np.maximum(k, 0.0))
-    # Fresnel at the top boundary, from inside at cos1 (the same as from outside at cos0).
-    a, b = cos0 * et, cos1  # outside cos * (r0/r1) and inside cos, both over r1
-    rs = (a - b) / np.maximum(a + b, 1e-12)
-    rp = (et * cos1 - cos0) / np.maximum(et * cos1 + cos0, 1e-12)
-    trans = 1.0 - 0.5 * (rs * rs + rp * rp)
-    val = np.where((k > 0.0) & (cos1 > 0.0), trans * cos1, 0.0)
-    ring = val.mean(axis=-2) * (2.0 * np.pi)
+    ring = _leaving(cos1, eta[..., None, None]).mean(axis=-2) * (2.0 * np.pi)
     return (e1 + 2.0) / (2.0 * np.pi * (e1 + 1.0)) * np.einsum("...k,k->...", ring, w)
 
 
@@ -254,12 +257,7 @@ def _layer_table(eta: float):
     phi = (np.arange(_PHI_NODES) + 0.5) * (np.pi / _PHI_NODES)
     cos1 = c * t[None, :, None] + np.sqrt(1.0 - c * c) * np.sqrt(np.maximum(1.0 - t * t, 0.0))[None, :, None] * \
         np.cos(phi)[None, None, :]
-    k = 1.0 - (1.0 - cos1 * cos1) / (eta * eta)
-    cos0 = np.sqrt(np.maximum(k, 0.0))
-    rs = (cos0 * eta - cos1) / np.maximum(cos0 * eta + cos1, 1e-12)
-    rp = (eta * cos1 - cos0) / np.maximum(eta * cos1 + cos0, 1e-12)
-    val = np.where((k > 0.0) & (cos1 > 0.0), (1.0 - 0.5 * (rs * rs + rp * rp)) * cos1, 0.0)
-    ring = val.mean(axis=-1) * (2.0 * np.pi)  # (c, t)
+    ring = _leaving(cos1, eta).mean(axis=-1) * (2.0 * np.pi)  # (c, t)
     e = np.expm1(u)
     # int t^e ring dt with dt = 2 x dx, in logs so that huge exponents underflow cleanly.
     with np.errstate(under="ignore"):

@@ -57,10 +57,10 @@ def view_by_view(target: SphereTarget, params) -> np.ndarray:
             d = d_noise if field_ is None else field_(p)
             n1 = lower_normal(params, n, p, d)
             vv = np.broadcast_to(v, n.shape)
-            passed = base_transmittance(params, shade_closures(params, n, n1, d, vv, plan), n, vv, plan)
+            res = shade_closures(params, n, n1, d, vv, plan)
+            passed = base_transmittance(params, res, n, vv, plan)
             if view.environment is not None:
-                return view.environment.shade(shade_closures(params, n, n1, d, v, plan), n, v, plan.lobe,
-                                              ng=n), passed
+                return view.environment.shade(res, n, v, plan.lobe, ng=n), passed
             return view.sun.strength * closure_shading(params, n, n1, d, view.sun.l, v, ng=n, plan=plan), passed
 
         pixels, t_front = side(n0, pts["p_object"])

@@ -136,13 +136,13 @@ def beam_contrast(p: LayeredParams) -> float:
     the last."""
     out = 0.0
     sin0 = math.sin(math.radians(MULTIBEAM_RIM_DEG))
+    c0 = math.cos(math.radians(MULTIBEAM_RIM_DEG))
     for r1, n2, k2 in zip(p.r1, p.r2, p.k2):
         r01 = abs((p.r0 - r1) / (p.r0 + r1))
         r12 = abs(complex(r1 - n2, -k2) / complex(r1 + n2, k2))
         out = max(out, r01 * r12)
         # At the rim: cosines in the layer and below from Snell's law (complex below a metal, or
         # under total internal reflection).
-        c0 = math.sqrt(1.0 - sin0 * sin0)
         c1 = cmath.sqrt(1.0 - (p.r0 * sin0 / r1) ** 2)
         n2c = complex(n2, k2)
         c2 = cmath.sqrt(1.0 - (p.r0 * sin0 / n2c) ** 2)

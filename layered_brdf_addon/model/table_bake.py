@@ -143,13 +143,13 @@ def table_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
     closures, oriented = _closures(replace(plan, tables=False))
     azimuths = AZIMUTH_SAMPLES if plan.normals == "tilted" else 1
     width = ANGLE_SAMPLES if azimuths > 1 else COS_SAMPLES
-    height = thickness_samples(params, plan, TableLayout(closures, width, 1, azimuths, oriented,
-                                                         _transmittance_place(plan)))
+    place = _transmittance_place(plan)
+    height = thickness_samples(params, plan, TableLayout(closures, width, 1, azimuths, oriented, place))
     needed = 1 if plan.thickness == "constant" else _fringe_samples(params, plan)
     if azimuths > 1 and needed > height:
         raise NotTabulable(f"plan {plan.key}: a tilted boundary's tables for {needed} thickness rows would exceed "
                            f"{MAX_TABLE_BYTES} bytes")
-    return TableLayout(closures, width, height, azimuths, oriented, _transmittance_place(plan))
+    return TableLayout(closures, width, height, azimuths, oriented, place)
 
 
 def _transmittance_place(plan: EffectPlan) -> str:

@@ -7,11 +7,19 @@ from .fresnel import fresnel_f0, schlick
 from .step import shader_function
 
 
+def top_transmittance(ops, r1, r0, cos_v):
+    """What the top boundary transmits with the paper's optics, ``1 - F(v)``, per channel."""
+    return 1.0 - schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*r1), r0))
+
+
 def base_weight(ops, r1, r0, cos_v):
     """What the top boundary transmits to the artist's base shader, ``1 - F(v)``: the mean
     over the channels (a Mix Shader takes one factor)."""
-    F = schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*r1), r0))
-    return 1.0 - ops.dot(F, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
+    return _channel_mean(ops, top_transmittance(ops, r1, r0, cos_v))
+
+
+def _channel_mean(ops, x):
+    return ops.dot(x, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
 
 
 CLEAR_K = 1e-3  # a lower medium of smaller extinction is clear: it passes on what enters it
@@ -53,8 +61,8 @@ def passed_at(ops, plan, inputs, cos_v, reflected=None):
                                     inputs["kd"])
         r, g, b = ops.components(passed)
         return ops.minimum(ops.minimum(r, g), b), passed
-    passed = 1.0 - schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*inputs["r1"]), inputs["r0"]))
-    return base_weight(ops, inputs["r1"], inputs["r0"], cos_v), passed
+    passed = top_transmittance(ops, inputs["r1"], inputs["r0"], cos_v)
+    return _channel_mean(ops, passed), passed
 
 
 @shader_function

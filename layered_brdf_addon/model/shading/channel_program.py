@@ -74,9 +74,10 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, n2=
                           energy=optics == "physical")
     placed = [spread(ops, lobes[k], r1) for k in LOBE_PLACEMENT]
     modes = dict(interference=interference, band=band, dispersion=r1_lobes is None, footprint=footprint)
+    e_T = spread(ops, lobes["e_T"], r1)
     if optics == "physical":
-        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, spread(ops, lobes["e_T"], r1), e0, ks, r0, n2, k2, d,
-                                     lobes["cos_v"], *placed, orders=orders, **modes)
+        AR, AT, AI = film_amplitudes(ops, r1, lam, e0, e_T, e0, ks, r0, n2, k2, d, lobes["cos_v"], *placed,
+                                     orders=orders, **modes)
     else:
         AR, AT, AI = lobe_amplitudes(ops, r1, lam, e0, e1, ks, r0, d, lobes["cos_v"], *placed, **modes)
     if interference:
@@ -85,6 +86,6 @@ def channel_block(ops, r1, lam, e0, e1, ks, r0, n0, n1, v, d, r1_lobes=None, n2=
     keys = ["AR", "w_T", "e_T", "alpha_T", "aniso_T"] + [k for k in out if k[:3] in ("N_T", "U_T")]
     if optics == "physical":
         # What the lobes reflect in all, per channel.
-        out["reflected"] = carried(ops, AR, e0) + carried(ops, AT, spread(ops, lobes["e_T"], r1))
+        out["reflected"] = carried(ops, AR, e0) + carried(ops, AT, e_T)
         keys.append("reflected")
     return {k: out[k] for k in keys}

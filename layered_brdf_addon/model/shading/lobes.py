@@ -7,10 +7,9 @@ from __future__ import annotations
 import math
 
 from .closures import Closure
-from .energy import energy_peak
+from .energy import INV_2PI, energy_peak
 from .step import shader_function
 
-INV_2PI = 0.5 / math.pi
 MIN_COS = 0.05  # lower bound of the view cosine used to stretch Beckmann lobes
 ANISO_FLOOR = 0.5  # the stretch 1/mu of a lobe across the view's plane stops at mu = alpha / 2
 

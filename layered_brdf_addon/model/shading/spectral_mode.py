@@ -150,16 +150,15 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
     if not plan.specular:
         return res
     res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, P["e0"], v, rgb(acc_R), energy=bool(optics)))
-    e_T = channels(ops, lobes["e_T"])
+    e, alpha, aniso = (channels(ops, lobes[k]) for k in ("e_T", "alpha_T", "aniso_T"))
     if optics:
         # What the lobes reflect in all, per channel.
         reflected = carried(ops, acc_R, P["e0"])
         for slot, g in enumerate(order):
-            reflected = reflected + carried(ops, acc_T[g], e_T[slot])
+            reflected = reflected + carried(ops, acc_T[g], e[slot])
         res.extras["reflected"] = ops.combine(*rgb(reflected))
     inv_peak = channels(ops, lobes["inv_peak_T"])
     weights = merged_group_weights(ops, [acc_T[g] * inv_peak[slot] for slot, g in enumerate(order)])
-    e, alpha, aniso = (channels(ops, lobes[k]) for k in ("e_T", "alpha_T", "aniso_T"))
     for slot, (g, w) in enumerate(zip(order, weights)):
         res.glossy.append(Closure(f"transmit_{g}", lobes[f"N_T{slot}"], e[slot], alpha[slot], w, aniso[slot],
                                   lobes[f"U_T{slot}"]))

@@ -37,9 +37,8 @@ import math
 from dataclasses import dataclass
 
 from ..plan import EffectPlan
-from .base_shader import base_receives_light
+from .base_shader import base_receives_light, top_transmittance
 from .closures import Closure, ShadingResult
-from .fresnel import fresnel_f0, schlick
 from .inputs import program_inputs
 
 TABLE_FORMAT = 5  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
@@ -266,9 +265,8 @@ def tabulated_shade(ops, plan: EffectPlan, layout: TableLayout, P, n0, v, d, axi
     if layout.transmittance == "none":
         res.extras["transmittance"] = ops.combine(0.0, 0.0, 0.0)
     elif layout.transmittance == "computed":
-        cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-        r1 = program_inputs(P)["r1"]
-        res.extras["transmittance"] = 1.0 - schlick(ops, cos_v, fresnel_f0(ops, ops.combine(*r1), P["r0"]))
+        res.extras["transmittance"] = top_transmittance(ops, program_inputs(P)["r1"], P["r0"],
+                                                        ops.clamp(ops.dot(v, n0), 0.0, 1.0))
     else:
         res.extras["transmittance"] = colour if layout.transmittance == "shared" else \
             read(layout.transmittance_image)[0]
