@@ -40,3 +40,22 @@ def render_row(params_list, backend="nodes", sun=SUN_40, height=64, samples=1, p
     else:
         passes = render_passes()
     return RenderedRow(list(params_list), cam, sun, centers, passes, backend, mats)
+
+
+def render_furnace(params_list, backend="nodes", height=32, samples=64, before=None):
+    """:func:`render_row` under a uniform white world of radiance 1 (a white furnace), with the bounces a
+    clear film needs (the far wall seen through it); ``before(row)`` edits the materials first."""
+    import bpy
+
+    from layered_brdf_addon.blender.scene import render_passes, render_passes_osl, set_uniform_environment
+
+    row = render_row(params_list, backend=backend, height=height, samples=1)
+    if before is not None:
+        before(row)
+    scene = bpy.context.scene
+    scene.cycles.samples = samples
+    scene.cycles.max_bounces = 8
+    scene.cycles.transparent_max_bounces = 8
+    set_uniform_environment(1.0)
+    row.passes = render_passes_osl() if backend == "osl" else render_passes()
+    return row

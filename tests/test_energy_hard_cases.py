@@ -54,22 +54,14 @@ def test_hard_films_stay_finite_and_return_at_most_what_arrives(name, mu):
 def test_hard_films_in_a_white_furnace(backend):
     """Each ball's mean at most 1 (and the closed form's error), its 95th percentile too (and the render's
     noise); every pixel finite."""
-    import bpy
-
-    from layered_brdf_addon.blender.scene import render_passes, render_passes_osl, set_uniform_environment
     from layered_brdf_addon.model.geometry import dot
     from layered_brdf_addon.model.sphere import sphere_geometry
 
-    from render_helpers import render_row
+    from render_helpers import render_furnace
 
     cases = [p.replace(evaluation="arithmetic") for p in HARD.values()] + list(HARD.values())
-    row = render_row(cases, backend=backend, height=32, samples=1)
-    scene = bpy.context.scene
-    scene.cycles.samples = 64
-    scene.cycles.max_bounces = 8
-    scene.cycles.transparent_max_bounces = 8
-    set_uniform_environment(1.0)
-    passes = render_passes_osl() if backend == "osl" else render_passes()
+    row = render_furnace(cases, backend, height=32, samples=64)
+    passes = row.passes
     assert np.all(np.isfinite(passes.beauty))
     geo = sphere_geometry(row.camera, row.centers)
     names = [f"{n}, computed" for n in HARD] + list(HARD)

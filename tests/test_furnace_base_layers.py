@@ -5,7 +5,6 @@ its lower boundary is a perfect mirror and its interference term is not bounded,
 presets exceed 1 by the paper's own amount (docs/physical-optics.md has the table)."""
 from __future__ import annotations
 
-import bpy
 import numpy as np
 import pytest
 
@@ -24,26 +23,19 @@ NOISE = 0.03  # the 95th percentile of a 64-sample render sits this far above it
 
 
 def furnace_row(params_list, own_base: list[bool]):
-    from layered_brdf_addon.blender.scene import render_passes, set_uniform_environment
+    from layered_brdf_addon.blender.material import shader_node
 
-    from render_helpers import render_row
+    from render_helpers import render_furnace
 
-    row = render_row(params_list, backend="nodes", height=HEIGHT, samples=1)
-    for mat, own in zip(row.materials, own_base):
-        if own:
-            from layered_brdf_addon.blender.material import shader_node
+    def own_shaders(row):
+        for mat, own in zip(row.materials, own_base):
+            if own:
+                tree = mat.node_tree
+                diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+                diffuse.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+                tree.links.new(diffuse.outputs[0], shader_node(mat).inputs["Base Shader"])
 
-            tree = mat.node_tree
-            diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
-            diffuse.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-            tree.links.new(diffuse.outputs[0], shader_node(mat).inputs["Base Shader"])
-    scene = bpy.context.scene
-    scene.cycles.samples = SAMPLES
-    scene.cycles.max_bounces = 8
-    scene.cycles.transparent_max_bounces = 8
-    set_uniform_environment(1.0)
-    row.passes = render_passes()
-    return row
+    return render_furnace(params_list, "nodes", HEIGHT, SAMPLES, before=own_shaders)
 
 
 def p95_per_sphere(row) -> list[np.ndarray]:

@@ -3,7 +3,6 @@ passes to its clear base add up to the light it receives, from the centre to the
 (baked tables and computed per point) and the OSL shader (docs/energy.md)."""
 from __future__ import annotations
 
-import bpy
 import numpy as np
 import pytest
 
@@ -28,17 +27,10 @@ FILMS = {
 
 
 def furnace(backend: str) -> dict:
-    from layered_brdf_addon.blender.scene import render_passes, render_passes_osl, set_uniform_environment
+    from render_helpers import render_furnace
 
-    from render_helpers import render_row
-
-    row = render_row(list(FILMS.values()), backend=backend, height=HEIGHT, samples=1)
-    scene = bpy.context.scene
-    scene.cycles.samples = SAMPLES
-    scene.cycles.max_bounces = 8
-    scene.cycles.transparent_max_bounces = 8
-    set_uniform_environment(1.0)
-    passes = render_passes_osl() if backend == "osl" else render_passes()
+    row = render_furnace(list(FILMS.values()), backend, HEIGHT, SAMPLES)
+    passes = row.passes
     geo = sphere_geometry(row.camera, row.centers)
     mu = dot(geo.n0, geo.view)
     out = {}
