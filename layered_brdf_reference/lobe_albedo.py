@@ -39,6 +39,25 @@ def _legendre01(n: int):
     return 0.5 * (x + 1.0), 0.5 * w
 
 
+@functools.lru_cache(maxsize=None)
+def _gaussian_slopes(n: int):
+    """Gauss-Legendre nodes of a unit-variance-over-two Gaussian slope (``ndtri(u) / sqrt 2``) on each of two
+    axes and the product weights: Beckmann's microfacet slopes over ``alpha``, sampling ``D cos theta_h``."""
+    from scipy.special import ndtri
+
+    u, w = _legendre01(n)
+    return ndtri(u) / math.sqrt(2.0), np.outer(w, w)
+
+
+def _facet_normals(a_x, a_y, n: int):
+    """The microfacet normals ``(h_x, h_y, h_z)`` of the slope nodes for alphas ``a_x`` (along x, across the
+    view's plane) and ``a_y`` (along y, within it), and their weights (:func:`_gaussian_slopes`)."""
+    q, ww = _gaussian_slopes(n)
+    sx, sy = q[:, None] * a_x, q[None, :] * a_y
+    hz = 1.0 / np.sqrt(1.0 + sx * sx + sy * sy)
+    return -sx * hz, -sy * hz, hz, ww
+
+
 def beckmann_albedo(ax, ay, mu, n: int = QUADRATURE) -> np.ndarray:
     """Directional albedo of Cycles' Beckmann closure (no Fresnel, unit weight) seen at cosine
     ``mu``, alphas ``ax`` across the plane of the view and the normal, ``ay`` within it.
@@ -46,18 +65,11 @@ def beckmann_albedo(ax, ay, mu, n: int = QUADRATURE) -> np.ndarray:
     Integrated over the microfacet normals, whose slopes are Gaussian (``D cos theta_h`` is their
     density): ``E = < G2 (v.h) / (mu cos theta_h) >`` over the normals whose mirror of the view
     lies above the horizon, ``G2 = 1 / (1 + Lambda_v + Lambda_l)`` as Cycles evaluates it."""
-    from scipy.special import ndtri
-
     ax, ay, mu = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (ax, ay, mu)))
-    u, w = _legendre01(n)
-    q = ndtri(u) / math.sqrt(2.0)
     out = np.empty(ax.shape)
     for idx in np.ndindex(ax.shape):
         a_x, a_y, m = max(ax[idx], 1e-4), max(ay[idx], 1e-4), min(max(mu[idx], 1e-4), 1.0)
-        sx = q[:, None] * a_x
-        sy = q[None, :] * a_y
-        hn = 1.0 / np.sqrt(1.0 + sx * sx + sy * sy)
-        hx, hy, hz = -sx * hn, -sy * hn, hn
+        hx, hy, hz, ww = _facet_normals(a_x, a_y, n)
         vy, vz = math.sqrt(max(1.0 - m * m, 0.0)), m
         vh = hy * vy + hz * vz
         lx, ly, lz = 2.0 * vh * hx, 2.0 * vh * hy - vy, 2.0 * vh * hz - vz
@@ -67,7 +79,7 @@ def beckmann_albedo(ax, ay, mu, n: int = QUADRATURE) -> np.ndarray:
 
         g2 = 1.0 / (1.0 + lam(0.0, vy, vz) + lam(lx, ly, lz))
         val = np.where((lz > 0.0) & (vh > 0.0), g2 * vh / (m * hz), 0.0)
-        out[idx] = float(np.einsum("i,j,ij->", w, w, val))
+        out[idx] = float((ww * val).sum())
     return out
 
 
@@ -123,18 +135,12 @@ def visible_cosine(alpha, mu, n: int = QUADRATURE) -> np.ndarray:
     """The mean cosine between a view at cosine ``mu`` to the normal and the normals of the microfacets it
     sees on an isotropic Beckmann surface of ``alpha``: the average of ``v.h`` weighted by ``max(v.h, 0) D(h)``
     (the visible normals' density, over ``D cos theta_h``, which the slopes sample)."""
-    from scipy.special import ndtri
-
     alpha, mu = np.broadcast_arrays(np.asarray(alpha, dtype=float), np.asarray(mu, dtype=float))
-    u, w = _legendre01(n)
-    q = ndtri(u) / math.sqrt(2.0)
-    ww = np.outer(w, w)
     out = np.empty(alpha.shape)
     for idx in np.ndindex(alpha.shape):
         a, m = max(alpha[idx], 1e-5), min(max(mu[idx], 0.0), 1.0)
-        sx, sy = q[:, None] * a, q[None, :] * a
-        hz = 1.0 / np.sqrt(1.0 + sx * sx + sy * sy)
-        vh = -sy * hz * math.sqrt(1.0 - m * m) + hz * m
+        _, hy, hz, ww = _facet_normals(a, a, n)
+        vh = hy * math.sqrt(1.0 - m * m) + hz * m
         seen = ww * np.maximum(vh, 0.0) / hz
         out[idx] = float((seen * vh).sum() / seen.sum())
     return out
