@@ -304,7 +304,7 @@ def test_two_copies_never_register_side_by_side_and_each_removes_only_its_own(se
             copy.register()
         copy.unregister()  # what Blender may call after a failed register: leaves the first copy alone
         assert hasattr(bpy.types.Material, SETTINGS)
-        assert sorted(_own_handlers(first)) == ["on_depsgraph_update", "on_load_post"]
+        assert sorted(_own_handlers(first)) == ["after_edit", "on_load_post"]
         assert _own_handlers(second) == []
         assert all(registration._registered_versions(cls) for cls in registration.CLASSES)
         obj = plain_object()  # the survivor works
@@ -317,7 +317,7 @@ def test_two_copies_never_register_side_by_side_and_each_removes_only_its_own(se
             layered_brdf_addon.register()
         layered_brdf_addon.unregister()
         assert hasattr(bpy.types.Material, SETTINGS)
-        assert sorted(_own_handlers(second)) == ["on_depsgraph_update", "on_load_post"]
+        assert sorted(_own_handlers(second)) == ["after_edit", "on_load_post"]
         assert _own_handlers(first) == []
         copy.unregister()
         assert not hasattr(bpy.types.Material, SETTINGS)

@@ -24,8 +24,9 @@ from layered_brdf_addon.backends import node_group as node_group_builder
 from layered_brdf_addon.blender.material import (MATERIAL_KEY, apply_layered_material, input_value, param_socket,
                                                  read_inputs, remove_layered_material, shader_node)
 from layered_brdf_addon.blender import properties, ui
+from layered_brdf_addon.blender.freshness import after_edit
 from layered_brdf_addon.blender.stored_keys import ENUMS_KEY
-from layered_brdf_addon.blender.sync import material_problem, on_depsgraph_update, sync_material, upgrade_all
+from layered_brdf_addon.blender.sync import material_problem, sync_material, upgrade_all
 from layered_brdf_addon.model import preset
 from layered_brdf_addon.model.params import LayeredParams, ParameterError, iter_sockets
 
@@ -305,7 +306,7 @@ def test_a_deleted_group_input_is_reported_and_reapplying_the_same_preset_repair
     assert upgrade_all() == []
     capfd.readouterr()
     updates = SimpleNamespace(mode="VIEWPORT", updates=[SimpleNamespace(id=mat_a), SimpleNamespace(id=mat_b)])
-    on_depsgraph_update(bpy.context.scene, updates)
+    after_edit(bpy.context.scene, updates)
     assert "Traceback" not in capfd.readouterr().err
     labels = panel_labels(a)
     assert material_problem(mat_a) in labels

@@ -19,7 +19,8 @@ from layered_brdf_addon.blender.material import SUBGROUP_KEY, animated_parameter
 from layered_brdf_addon.blender.material_values import params_of, settings
 from layered_brdf_addon.blender.scene import reset_blender
 from layered_brdf_addon.blender.stored_keys import SETTINGS
-from layered_brdf_addon.blender.sync import desired, material_problem, on_depsgraph_update, on_load_post
+from layered_brdf_addon.blender.freshness import after_edit
+from layered_brdf_addon.blender.sync import desired, material_problem, on_load_post
 from layered_brdf_addon.model import LayeredParams, preset
 from layered_brdf_addon.model.params import PARAM_SPECS
 from layered_brdf_addon.model.policy import plan_effects
@@ -54,7 +55,7 @@ def _leftovers():
 
 def test_register_twice_then_unregister_leaves_nothing():
     layered_brdf_addon.register()  # already registered by the fixture
-    assert sum(f is on_depsgraph_update for f in bpy.app.handlers.depsgraph_update_post) == 1
+    assert sum(f is after_edit for f in bpy.app.handlers.depsgraph_update_post) == 1
     assert sum(f is on_load_post for f in bpy.app.handlers.load_post) == 1
     assert all(cls.is_registered for cls in registration.CLASSES)
     layered_brdf_addon.unregister()

@@ -50,9 +50,10 @@ def animated_paths(owner):
 
 
 # --- which parameters vary -----------------------------------------------------------------------
-def animated_parameters(mat) -> set[str]:
-    """Shader inputs whose value varies: keyframed, driven, or fed by a link."""
-    node = shader_node(mat)
+def animated_parameters(mat, node=None) -> set[str]:
+    """Shader inputs whose value varies: keyframed, driven, or fed by a link (of ``node``, a copy of the
+    shader node in ``mat``; default the material's shader node)."""
+    node = shader_node(mat) if node is None else node
     if node is None:
         return set()
     names = {s.name for s in iter_sockets() if input_linked(node, s.name)}

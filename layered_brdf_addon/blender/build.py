@@ -8,6 +8,8 @@ otherwise only the parameter values are written into the shader node's sockets.
 """
 from __future__ import annotations
 
+import json
+
 from ..backends import node_group as node_group_builder
 from ..model import policy
 from ..model.base_layers import base_node
@@ -22,7 +24,7 @@ from .own_nodes import CLEAR_BASE_ADD, active_output, stamp
 from .slots import material_for
 from .sockets import find_socket, held_units, legacy_tint, node_damage, set_inputs, socket_parameter
 from .stored_keys import (AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL, BACKEND_KEY, BASE_CHANNELS, BUILD_KEY,
-                          ENUMS_KEY, OWN_PREFIX, ROLE_KEY, SHADER_NODE, settings_record)
+                          CHOSEN_PLAN_KEY, ENUMS_KEY, OWN_PREFIX, ROLE_KEY, SHADER_NODE, settings_record)
 from .tables import ensure_tables, tables_current
 from .targets import params_argument, shown
 from .unit_conversion import link_converted
@@ -40,7 +42,8 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     material's tree only when the backend or the plan of active effects changed, and
     otherwise only writes the parameter values into the shader's input sockets.
     ``plan`` defaults to :func:`plan_effects` of ``params`` (``EffectPlan.full()`` gives
-    the always-full shader).  Returns the material.
+    the always-full shader); a plan given is kept when the material's values change later (only its
+    tables follow them, :mod:`.freshness`).  Returns the material.
     """
     params = params_argument(params)
     if plan is not None and not isinstance(plan, EffectPlan):
@@ -49,10 +52,15 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
         raise ParameterError("name", name if isinstance(name, str) else shown(name), "a material name (text)")
     policy.check_backend(backend, params.lobe)
     mat = material_for(target, name)
+    chosen = plan is not None
     plan = plan or plan_effects(params, animated_parameters(mat), backend)
     if plan.lobe != params.lobe:
         plan = EffectPlan(**{**plan.to_dict(), "lobe": params.lobe})
     node, own = claim(mat)
+    if chosen:
+        mat[CHOSEN_PLAN_KEY] = json.dumps(plan.to_dict(), sort_keys=True)
+    else:
+        mat.pop(CHOSEN_PLAN_KEY, None)
     if not tree_current(mat, node, backend, plan, params):
         if not tree_current(mat, node, backend, plan, params, tables=False):
             node = _build_tree(mat, params, backend, plan, node, own)
@@ -139,7 +147,7 @@ def _group_lacks_sockets(group) -> bool:
         any(group_socket_name(s) not in inputs for s in iter_sockets())
 
 
-def _group_for(plan: EffectPlan, params: LayeredParams):
+def group_for(plan: EffectPlan, params: LayeredParams):
     """The node group for ``plan`` (:func:`node_group_builder.ensure_group`). A group stamped as
     current that lacks a socket (the artist deleted one) is marked stale first, so it is rebuilt,
     or set aside while other materials still use it (each is repaired when applied again)."""
@@ -186,7 +194,7 @@ def _build_tree(mat, params: LayeredParams, backend: str, plan: EffectPlan, old,
         out = tree.nodes.new("ShaderNodeOutputMaterial")
         out.location = (400, 0)
     if backend == "nodes":
-        group = _group_for(plan, params)
+        group = group_for(plan, params)
         node = tree.nodes.new("ShaderNodeGroup")
         node.node_tree = group
     else:

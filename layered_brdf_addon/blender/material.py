@@ -3,7 +3,9 @@ command line and the tests call, and what reads a layered material back.
 
 The work is done in the modules named below; this module gathers their public names:
 
-* :mod:`.build`: building the material (:func:`apply_layered_material`);
+* :mod:`.build`: building the material (:func:`apply_layered_material`, which also installs the
+  handlers of :mod:`.freshness`, so that a script that never registers the add-on renders what it
+  sets, keys, drives or links);
 * :mod:`.own_nodes`: finding the add-on's shader node (:func:`shader_node`);
 * :mod:`.sockets`: the parameters' values in the node's sockets;
 * :mod:`.animation`: which parameters are animated, driven or linked;
@@ -14,8 +16,11 @@ The work is done in the modules named below; this module gathers their public na
 """
 from __future__ import annotations
 
+import functools
+
+from . import build, freshness
 from .animation import animated_parameters
-from .build import apply_layered_material, tree_current
+from .build import tree_current
 from .own_nodes import shader_node
 from .slots import displaced_material, remove_layered_material
 from .sockets import (as_rendered, check_node, input_linked, input_value, missing_inputs, node_damage, param_socket,
@@ -24,6 +29,15 @@ from .stored_keys import (AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL, DIS
                           ROLE_KEY, SHADER_NODE, SLOT_KEY, SUBGROUP_KEY, TEXT_KEY)
 from .targets import SURFACE_KINDS, SURFACE_OBJECTS, DataBlockError, object_problem, takes_layered_material
 from .unused_data import remove_unused_own_data
+
+
+
+@functools.wraps(build.apply_layered_material)
+def apply_layered_material(*args, **kwargs):
+    mat = build.apply_layered_material(*args, **kwargs)
+    freshness.install()  # the render shows what a script does to the material next, registered or not
+    return mat
+
 
 __all__ = [
     "AOV_LOWER_NORMAL", "AOV_THICKNESS", "AOV_UPPER_NORMAL", "DISPLACED_KEY", "DataBlockError", "MATERIAL_KEY",

@@ -8,9 +8,10 @@ another default reads that default (:data:`LEGACY_DEFAULTS`), or what its last b
 from __future__ import annotations
 
 from ..model.params import LayeredParams, ParameterError
+from ..model.policy import BACKENDS
 from .own_nodes import shader_node
 from .sockets import read_inputs
-from .stored_keys import BUILD_KEY, MATERIAL_KEY, SETTINGS, recorded_settings, setting_specs
+from .stored_keys import BACKEND_KEY, BUILD_KEY, MATERIAL_KEY, SETTINGS, recorded_settings, setting_specs
 
 # Settings whose default has changed, with the default a material built before the change
 # had: Blender stores a setting only once it is written, so a material that kept the old
@@ -29,9 +30,29 @@ def layered_material_of(obj):
     return mat if is_layered(mat) else None
 
 
+class RecordedSettings:
+    """A material's settings where the add-on is not registered (a script that only imports it): what
+    its last build recorded, read-only in the file (a build records them again), else the defaults."""
+
+    def __init__(self, mat):
+        self._set = recorded_settings(mat)
+        defaults = LayeredParams()
+        for s in setting_specs():
+            setattr(self, s.name, self._set.get(s.name, getattr(defaults, s.name)))
+        backend = mat.get(BACKEND_KEY)
+        self.backend = backend if backend in BACKENDS else BACKENDS[0]
+        self.preset = ""
+        self.adopted = True
+
+    def is_property_set(self, name: str) -> bool:
+        return name in self._set
+
+
 def settings(mat):
-    """The material's settings (the property group the add-on registers on materials)."""
-    return getattr(mat, SETTINGS)
+    """The material's settings: the property group the add-on registers on materials, or, where it is
+    not registered, what the material's last build recorded (:class:`RecordedSettings`)."""
+    st = getattr(mat, SETTINGS, None)
+    return st if st is not None else RecordedSettings(mat)
 
 
 def legacy_values(mat) -> dict:

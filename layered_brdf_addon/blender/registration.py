@@ -1,4 +1,5 @@
-"""Registering the add-on: one list of classes, one property on materials, five handlers.
+"""Registering the add-on: one list of classes, one property on materials, its handlers (those of
+:mod:`.freshness` and four more).
 
 Called only from the package's ``register()`` and ``unregister()`` (the add-on's entry point).
 """
@@ -7,7 +8,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import PointerProperty
 
-from . import assets, fit_operator, operators, properties, sync, ui
+from . import assets, fit_operator, freshness, operators, properties, sync, ui
 from .stored_keys import SETTINGS
 
 CLASSES = (
@@ -32,7 +33,6 @@ CLASSES = (
 
 def _handlers():
     return (
-        (bpy.app.handlers.depsgraph_update_post, sync.on_depsgraph_update),
         (bpy.app.handlers.load_post, sync.on_load_post),
         (bpy.app.handlers.undo_post, sync.on_undo_redo),  # an undo restores values, not an image's texels
         (bpy.app.handlers.redo_post, sync.on_undo_redo),
@@ -122,6 +122,8 @@ def register() -> None:
         description="Settings of the layered material (enums, backend, preset)"))
     for handlers, fn in _handlers():
         handlers.append(fn)
+    freshness.uninstall(everyone=True)  # those a script's import of any copy installed
+    freshness.install()
 
 
 def unregister() -> None:
@@ -130,6 +132,7 @@ def unregister() -> None:
     for handlers, fn in _handlers():
         for f in [f for f in handlers if _same_function(f, fn)]:
             handlers.remove(f)
+    freshness.uninstall()
     assets.cancel_queued()
     if _other_copy() is None and hasattr(bpy.types.Material, SETTINGS):
         delattr(bpy.types.Material, SETTINGS)

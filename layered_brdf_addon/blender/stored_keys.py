@@ -18,6 +18,7 @@ BUILD_KEY = "layered_brdf_build"  # "backend:plan key:base layer" of the tree's 
 BACKEND_KEY = "layered_brdf_backend"  # the backend of the last build
 ENUMS_KEY = "layered_brdf_enums"  # the settings of the last build (:func:`settings_record`)
 SYNC_KEY = "layered_brdf_synced"  # what the material was last synchronised to (sync.signature)
+CHOSEN_PLAN_KEY = "layered_brdf_chosen_plan"  # the plan a caller chose for the build (JSON), kept by later syncs
 SETTINGS = "layered_brdf_settings"  # the settings property group (a PointerProperty of Material)
 DISPLACED_KEY = "layered_brdf_displaced"  # the artist's material the layered one replaced in its slot
 SLOT_KEY = "layered_brdf_slot"  # how the slot got the layered material: "added", "filled" or "replaced"

@@ -4,7 +4,8 @@ material should be built as (:func:`desired`) and builds it (:func:`apply`).
 The panel's settings (their update callbacks), the operators, the looks and the looks library
 call these; so do the handlers, after an edit (depsgraph updates) and when a file is opened.
 A material's tree is built for an effect plan; when edits change the plan, :func:`sync_material`
-rebuilds it.  Animated, driven or linked sockets count as taking any value, so the plan never
+rebuilds it (:mod:`.freshness` holds the handlers that call it after an edit, on a frame change and
+before a render).  Animated, driven or linked sockets count as taking any value, so the plan never
 has to change during a render.
 """
 from __future__ import annotations
@@ -27,7 +28,8 @@ from .material_values import check_local, is_layered, layered_material_of, legac
 from .own_nodes import shader_node
 from .slots import remove_layered_material
 from .sockets import check_node
-from .stored_keys import BACKEND_KEY, BUILD_KEY, SYNC_KEY, recorded_settings, setting_specs, settings_record
+from .stored_keys import (BACKEND_KEY, BUILD_KEY, CHOSEN_PLAN_KEY, SYNC_KEY, recorded_settings, setting_specs,
+                          settings_record)
 
 _suspended = 0
 
@@ -137,6 +139,7 @@ def apply(target, params: LayeredParams, backend: str, plan: EffectPlan, preview
     record it in the material's settings, and refresh a look's preview (now with ``preview``,
     else when idle); returns the material."""
     mat = apply_layered_material(target, params, backend, plan=plan)
+    mat.pop(CHOSEN_PLAN_KEY, None)  # the plan its values call for, not a caller's choice
     write_settings(mat, params, backend)
     mat[SYNC_KEY] = signature(mat, params, backend, plan)
     assets.refresh(mat, preview=preview)  # a look's preview follows it; node groups are never assets
@@ -183,12 +186,15 @@ def remove_from_object(obj) -> bool:
 
 
 # --- every material of the file ------------------------------------------------------------------
-def _editable(mat) -> bool:
-    return is_layered(mat) and mat.library is None and shader_node(mat) is not None
+def editable(mat) -> bool:
+    """A local material the add-on made, or built its shader into (an artist's material given to
+    :func:`~.build.apply_layered_material`), that still holds the shader node."""
+    return mat.library is None and (is_layered(mat) or mat.get(BUILD_KEY) is not None) and \
+        shader_node(mat) is not None
 
 
-def _editable_layered_materials():
-    return [m for m in bpy.data.materials if _editable(m)]
+def editable_layered_materials():
+    return [m for m in bpy.data.materials if editable(m)]
 
 
 def sync_on_its_own(mat, check_sources: bool = False) -> bool:
@@ -208,20 +214,10 @@ def upgrade_all() -> list[str]:
     """Rebuild the local layered materials whose node group, baked tables (read back) or OSL text is out
     of date, each on
     its own (one that can't be leaves the others to be done); the names of those rebuilt."""
-    return [mat.name for mat in _editable_layered_materials() if sync_on_its_own(mat, check_sources=True)]
+    return [mat.name for mat in editable_layered_materials() if sync_on_its_own(mat, check_sources=True)]
 
 
 # --- handlers ------------------------------------------------------------------------------------
-@persistent
-def on_depsgraph_update(scene, depsgraph):
-    if depsgraph.mode != "VIEWPORT" or bpy.app.is_job_running("RENDER"):
-        return
-    updated = [u.id.original for u in depsgraph.updates if isinstance(u.id, bpy.types.Material)]
-    for mat in updated:
-        if _editable(mat):
-            sync_on_its_own(mat)
-
-
 @persistent
 def on_load_post(*_args):
     upgrade_all()

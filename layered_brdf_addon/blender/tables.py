@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import inspect
+import json
 import zlib
 
 import bpy
@@ -22,10 +23,12 @@ from ..model import ops_numpy, table_bake
 from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
 from ..model.table_bake import bake, spline_coefficients, table_digest, table_layout
+from .stored_keys import settings_record
 
 DIGEST_KEY = "layered_brdf_tables"  # on a group built for tables and on its images: the values they were baked for
 IMAGE_SLOT_KEY = "layered_brdf_table_slot"  # on an image: which image of the tables it is
 CHECKSUM_KEY = "layered_brdf_table_crc"  # on an image: checksum of the texels baked into it
+SETTINGS_KEY = "layered_brdf_table_settings"  # on a group built for tables: the settings baked (JSON)
 IMAGE_PREFIX = ".Layered BRDF table"  # a leading "." keeps the images out of Blender's image menus
 
 
@@ -130,6 +133,16 @@ def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
         image[IMAGE_SLOT_KEY] = k
         image[CHECKSUM_KEY] = _checksum(texels[k])
     group[DIGEST_KEY] = digest
+    group[SETTINGS_KEY] = json.dumps(settings_record(params), sort_keys=True)
+
+
+def baked_settings(group) -> dict | None:
+    """The settings (the parameters that are not sockets) ``group``'s tables were baked with, or None."""
+    try:
+        record = json.loads(group.get(SETTINGS_KEY, ""))
+    except (TypeError, ValueError):
+        return None
+    return record if isinstance(record, dict) else None
 
 
 def _shared(group) -> bool:

@@ -1,0 +1,187 @@
+"""The render shows the material, whoever edited it (blender/freshness.py): a material with baked tables
+(fig6_medium's) edited to Thickness 150-300 nm by every path a script or an artist takes, with and without
+the add-on registered, node group and OSL, renders as the material applied with those values does; a
+Shift+D copy of the node and its group added by hand to another material render their own values; an
+animation that goes gives the tables back."""
+from __future__ import annotations
+
+import bpy
+import numpy as np
+import pytest
+
+import layered_brdf_addon
+from layered_brdf_addon.backends.node_group import PLAN_KEY
+from layered_brdf_addon.blender import freshness
+from layered_brdf_addon.blender.material import apply_layered_material, shader_node
+from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, render_passes_osl,
+                                              reset_blender)
+from layered_brdf_addon.blender.stored_keys import CHOSEN_PLAN_KEY
+from layered_brdf_addon.model import preset
+from layered_brdf_addon.model.plan import EffectPlan
+from layered_brdf_addon.model.policy import plan_effects
+
+pytestmark = pytest.mark.slow
+
+FIG6 = preset("fig6_medium")  # baked tables by default; a tilted boundary
+EDITED = {"Thickness Max": (FIG6.d_max, 300.0), "Thickness Min": (FIG6.d_min, 150.0)}  # max first: min <= max
+HEIGHT = 40
+
+
+def _scene(registered: bool, backend: str):
+    reset_blender()
+    if registered:
+        layered_brdf_addon.register()
+    (obj,) = build_scene(SceneSpec(camera=camera_for(1, HEIGHT), samples=1, osl=backend == "osl"))
+    return obj
+
+
+def _render(backend: str) -> np.ndarray:
+    return (render_passes_osl() if backend == "osl" else render_passes()).beauty
+
+
+def _off(img: np.ndarray, ref: np.ndarray) -> float:
+    """The share of the lit pixels more than 2% off the reference."""
+    peak = ref.max(axis=-1)
+    rel = np.abs(img - ref).max(axis=-1) / np.maximum(peak, 0.02)
+    return float(np.mean(rel[peak > 0.01] > 0.02))
+
+
+@pytest.fixture(scope="module")
+def references():
+    """The material applied with the edited values, per backend; the handlers off again afterwards."""
+    out = {}
+    for backend in ("nodes", "osl"):
+        obj = _scene(False, backend)
+        apply_layered_material(obj, FIG6.replace(d_min=150.0, d_max=300.0), backend)
+        out[backend] = _render(backend)
+    freshness.uninstall()
+    yield out
+    reset_blender()
+
+
+def _edit(path: str, mat) -> None:
+    tree = mat.node_tree
+
+    def sock(name):
+        return shader_node(mat).inputs[name]  # looked up again: a rebuild replaces the node
+
+    if path == "socket":
+        for name, (_, value) in EDITED.items():
+            sock(name).default_value = value
+    elif path == "keyframes":
+        for name, (before, after) in EDITED.items():
+            data_path = sock(name).path_from_id("default_value")
+            sock(name).default_value = before
+            tree.keyframe_insert(data_path, frame=1)
+            sock(name).default_value = after
+            tree.keyframe_insert(data_path, frame=10)
+        bpy.context.scene.frame_set(10)
+    elif path == "link":
+        for name, (_, value) in EDITED.items():
+            node = tree.nodes.new("ShaderNodeValue")
+            node.outputs[0].default_value = value
+            tree.links.new(node.outputs[0], sock(name))
+    elif path == "driver":
+        for name, (_, value) in EDITED.items():
+            tree.driver_add(sock(name).path_from_id("default_value")).driver.expression = repr(value)
+
+
+@pytest.mark.parametrize("backend", ["nodes", "osl"])
+@pytest.mark.parametrize("registered", [False, True], ids=["script", "registered"])
+@pytest.mark.parametrize("path", ["socket", "keyframes", "link", "driver"])
+def test_every_edit_path_renders_the_edited_material(references, path, registered, backend):
+    obj = _scene(registered, backend)
+    try:
+        mat = apply_layered_material(obj, FIG6, backend)
+        _edit(path, mat)
+        assert _off(_render(backend), references[backend]) == 0.0
+    finally:
+        layered_brdf_addon.unregister() if registered else freshness.uninstall()
+
+
+def _copy_of(node, tree):
+    """What Shift+D makes: a node of the same group with its stamps and socket values."""
+    copy = tree.nodes.new("ShaderNodeGroup")
+    copy.node_tree = node.node_tree
+    for key in node.keys():
+        copy[key] = node[key]
+    for sock in node.inputs:
+        if hasattr(sock, "default_value") and not sock.is_linked:
+            copy.inputs[sock.name].default_value = sock.default_value
+    return copy
+
+
+@pytest.mark.parametrize("registered", [False, True], ids=["script", "registered"])
+@pytest.mark.parametrize("where", ["same material", "another material"])
+def test_a_copy_of_the_node_renders_its_own_values(references, where, registered):
+    obj = _scene(registered, "nodes")
+    try:
+        mat = apply_layered_material(obj, FIG6, "nodes")
+        original = shader_node(mat)
+        group = original.node_tree
+        if where == "same material":
+            tree = mat.node_tree
+        else:
+            artist = bpy.data.materials.new("Artist's")
+            if artist.node_tree is None:  # Blender 5.0 makes a material without nodes
+                artist.use_nodes = True
+            obj.material_slots[0].material = artist
+            tree = artist.node_tree
+        copy = _copy_of(original, tree)
+        for name, (_, value) in EDITED.items():
+            copy.inputs[name].default_value = value
+        out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+        tree.links.new(copy.outputs[0], out.inputs[0])
+        assert _off(_render("nodes"), references["nodes"]) == 0.0
+        assert shader_node(mat) == original and original.node_tree == group  # the original keeps its own
+    finally:
+        layered_brdf_addon.unregister() if registered else freshness.uninstall()
+
+
+def test_tables_come_back_when_the_animation_goes():
+    obj = _scene(False, "nodes")
+    try:
+        mat = apply_layered_material(obj, FIG6, "nodes")
+        _edit("keyframes", mat)
+        bpy.context.scene.frame_set(10)
+        assert not _plan_key(mat).endswith("Tb")  # the keyed thickness computed per point
+        mat.node_tree.animation_data_clear()
+        for name, (before, _) in EDITED.items():  # 150-300 nm cannot be tabulated with a tilt: back to the look's
+            shader_node(mat).inputs[name].default_value = before
+        bpy.context.scene.frame_set(1)  # no animation left: nothing moves, so the frame handler skips it...
+        freshness.before_render(bpy.context.scene)  # ...and the render's check bakes tables again
+        assert _plan_key(mat).endswith("Tb")
+    finally:
+        freshness.uninstall()
+
+
+def _plan_key(mat) -> str:
+    return shader_node(mat).node_tree[PLAN_KEY]
+
+
+def test_a_chosen_plan_is_kept_and_only_its_tables_follow_the_values():
+    obj = _scene(False, "nodes")
+    try:
+        plan = plan_effects(FIG6.replace(d_min=150.0, d_max=300.0))
+        plan = EffectPlan(**{**plan.to_dict(), "tables": False})  # a caller's choice: per point
+        mat = apply_layered_material(obj, FIG6, "nodes", plan=plan)
+        assert mat[CHOSEN_PLAN_KEY]
+        shader_node(mat).inputs["Thickness Max"].default_value = 300.0
+        freshness.before_render(bpy.context.scene)
+        assert _plan_key(mat) == plan.key
+    finally:
+        freshness.uninstall()
+
+
+def test_the_handlers_are_installed_once_and_register_takes_them_over():
+    obj = _scene(False, "nodes")
+    apply_layered_material(obj, FIG6, "nodes")
+    apply_layered_material(obj, FIG6, "nodes")
+    for name, fn in freshness.HANDLERS:
+        assert sum(f is fn for f in getattr(bpy.app.handlers, name)) == 1
+    layered_brdf_addon.register()
+    for name, fn in freshness.HANDLERS:
+        assert sum(f is fn for f in getattr(bpy.app.handlers, name)) == 1
+    layered_brdf_addon.unregister()
+    for name, fn in freshness.HANDLERS:
+        assert not any(f is fn for f in getattr(bpy.app.handlers, name))
