@@ -2,7 +2,8 @@
 
 A texture or a driver may feed any float: NaN (a driver's ``(1e30*1e30) - (1e30*1e30)``,
 or a texture computing it per pixel), +inf or -inf.  Every material input is clamped to
-its parameter's range with NaN going to the lower bound; Base Color is an albedo, each
+its parameter's range with NaN going to the lower bound; a linked Thickness of NaN or below 0 is
+0 nm (no jump to Thickness Min where a texture crosses zero); Base Color is an albedo, each
 channel within [0, 1] (NaN to 0); a Normal input keeps the direction of a huge finite
 vector and falls back to the shading normal when NaN or zero.  Each hostile sphere is
 compared with a sphere whose socket holds the value it must be treated as, in the same
@@ -47,6 +48,8 @@ def cases():
             ("Base Color<0", CORRELATED, "Base Color", (-1.0, 0.5, -1e30, 1.0), (0.0, 0.5, 0.0, 1.0)),
             ("Base Color=1e30", CORRELATED, "Base Color", (1e30, 1e30, 2.0, 1.0), (1.0, 1.0, 1.0, 1.0)),
             ("Base Color=texture nan", CORRELATED, "Base Color", "linked-nan", (0.0, 0.0, 0.0, 1.0)),
+            ("Thickness=texture nan", CORRELATED, "Thickness", "linked-nan", ("linked", 0.0)),
+            ("Thickness<0 linked", CORRELATED, "Thickness", ("linked", -50.0), ("linked", 0.0)),
             ("Normal=huge", CORRELATED, "Normal", (0.0, -1e30, 4e29), (0.0, -1.0, 0.4)),
             ("Normal=nan", CORRELATED, "Normal", (NAN, -1.0, 0.0), None)]
     return out
@@ -112,6 +115,10 @@ def rendered(request):
             sock = _socket(node, name)
             if value == "linked-nan":
                 _linked_nan(mat.node_tree, sock)
+            elif isinstance(value, tuple) and value[0] == "linked":  # a Value node's number
+                number = mat.node_tree.nodes.new("ShaderNodeValue")
+                number.outputs[0].default_value = value[1]
+                mat.node_tree.links.new(number.outputs[0], sock)
             elif name == "Normal":  # a vector from nodes (an OSL shader's unlinked Normal is N)
                 comb = mat.node_tree.nodes.new("ShaderNodeCombineXYZ")
                 for i, c in enumerate(value):

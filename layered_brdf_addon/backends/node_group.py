@@ -20,6 +20,7 @@ from ..model import program
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
 from ..model.shading import tables as tables_module
+from ..model.shading.surface_prelude import UNLINKED_THICKNESS
 from .node_ops import Expr, NodeOps
 from .osl_shader import shader_source
 
@@ -136,7 +137,7 @@ def _interface(group):
     s.description = "Upper-boundary normal; the shading normal when not connected"
     s = iface.new_socket(P_.THICKNESS_SOCKET, in_out="INPUT", socket_type="NodeSocketFloat")
     s.subtype = "WAVELENGTH"
-    s.default_value = -1.0  # not linked: the pattern (a group built for a link reads Thickness Min)
+    s.default_value = UNLINKED_THICKNESS  # not linked: the pattern (a group built for a link reads Thickness Min)
     s.hide_value = True
     s.description = P_.THICKNESS_DESCRIPTION
     panels = {}

@@ -26,6 +26,7 @@ from ..model.params import (BASE_COLOR_DESCRIPTION, THICKNESS_DESCRIPTION, THICK
                             socket_name)
 from ..model.plan import EffectPlan
 from ..model.policy import check_backend
+from ..model.shading.surface_prelude import UNLINKED_THICKNESS
 from ..model.shading.tables import TableLayout, tabulable
 from .osl_ops import OslOps
 from .osl_text import PREC_ATOM, FunctionBody, Val, literal, run_capturing_locals
@@ -292,7 +293,7 @@ class ShaderOps(OslOps):
 
 def _parameter_lines() -> list[str]:
     lines = ["normal Normal = N",
-             f"float {THICKNESS_INPUT} = -1.0\n      [[ string label = \"Thickness\", "
+             f"float {THICKNESS_INPUT} = {UNLINKED_THICKNESS:.1f}\n      [[ string label = \"Thickness\", "
              f"string help = \"{THICKNESS_DESCRIPTION}\" ]]"]
     for sock in iter_group_sockets():
         if sock.is_color:

@@ -13,6 +13,8 @@ from .step import shader_function
 DEG = math.pi / 180.0
 GRADIENT_STEP = 1.0e-3  # forward-difference step (world units) of the thickness gradient
 D_LIMIT = 1.0e6  # largest thickness (nm): the range of d_min and d_max
+UNLINKED_THICKNESS = -1.0  # the Thickness input's own value: nothing is linked (a link's -1 reads the same)
+UNLINKED_TOLERANCE = 1.0e-4
 
 
 @shader_function
@@ -90,10 +92,13 @@ def pattern_inputs(P):
 
 @shader_function
 def linked_thickness(ops, t, otherwise):
-    """The Thickness input's ``t`` (nm) within [0, D_LIMIT] (a NaN is 0), or ``otherwise`` where
-    ``t`` is negative: the socket's own value, -1, where nothing is linked (a constant there, so
-    Cycles folds the choice away and only ``otherwise`` is evaluated)."""
-    return ops.select(ops.lt(t, 0.0), otherwise, ops.clamp_input(t, 0.0, D_LIMIT))
+    """The Thickness input's ``t`` (nm) within [0, D_LIMIT], a NaN (a link's ``inf - inf``) and a negative
+    value 0 nm, so that a texture crossing zero thins the film continuously; ``otherwise`` where ``t`` is
+    the socket's own value, :data:`UNLINKED_THICKNESS`, that is where nothing is linked (a constant there,
+    so Cycles folds the choice away and only ``otherwise`` is evaluated)."""
+    t = ops.nan_to_zero(t)
+    unlinked = ops.lt(ops.abs(t - UNLINKED_THICKNESS), UNLINKED_TOLERANCE)
+    return ops.select(unlinked, otherwise, ops.clamp_input(t, 0.0, D_LIMIT))
 
 
 def pattern_thickness(ops, P, p_obj, plan: EffectPlan):
