@@ -2,8 +2,12 @@
 (fig6_medium's) edited to Thickness 150-300 nm by every path a script or an artist takes, with and without
 the add-on registered, node group and OSL, renders as the material applied with those values does; a
 Shift+D copy of the node and its group added by hand to another material render their own values; an
-animation that goes gives the tables back."""
+animation that goes gives the tables back; a script's backend and options are what the handlers keep, and
+an OSL material where the scene would render it black says how to fix that."""
 from __future__ import annotations
+
+import warnings
+from types import SimpleNamespace
 
 import bpy
 import numpy as np
@@ -12,10 +16,11 @@ import pytest
 import layered_brdf_addon
 from layered_brdf_addon.backends.node_group import PLAN_KEY
 from layered_brdf_addon.blender import freshness
-from layered_brdf_addon.blender.material import apply_layered_material, shader_node
+from layered_brdf_addon.blender.material import OSLSceneWarning, apply_layered_material, shader_node
+from layered_brdf_addon.blender.material_values import settings
 from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, render_passes_osl,
                                               reset_blender)
-from layered_brdf_addon.blender.stored_keys import CHOSEN_PLAN_KEY
+from layered_brdf_addon.blender.stored_keys import BACKEND_KEY, CHOSEN_PLAN_KEY
 from layered_brdf_addon.model import preset
 from layered_brdf_addon.model.plan import EffectPlan
 from layered_brdf_addon.model.policy import plan_effects
@@ -185,3 +190,29 @@ def test_the_handlers_are_installed_once_and_register_takes_them_over():
     layered_brdf_addon.unregister()
     for name, fn in freshness.HANDLERS:
         assert not any(f is fn for f in getattr(bpy.app.handlers, name))
+
+
+def test_a_script_s_backend_and_options_are_kept_by_the_handlers():
+    obj = _scene(True, "osl")
+    try:
+        mat = apply_layered_material(obj, FIG6, "nodes")
+        mat = apply_layered_material(obj, FIG6.replace(accuracy="spectral8"), "osl")
+        freshness.after_edit(bpy.context.scene, SimpleNamespace(mode="VIEWPORT", updates=[SimpleNamespace(id=mat)]))
+        freshness.before_render(bpy.context.scene)
+        assert shader_node(mat).bl_idname == "ShaderNodeScript" and mat[BACKEND_KEY] == "osl"
+        assert settings(mat).backend == "osl" and settings(mat).accuracy == "spectral8"
+    finally:
+        layered_brdf_addon.unregister()
+
+
+def test_an_osl_material_in_a_scene_that_renders_it_black_says_how_to_fix_it():
+    obj = _scene(False, "nodes")  # Cycles, Open Shading Language off (the default)
+    try:
+        with pytest.warns(OSLSceneWarning, match="shading_system = True"):
+            apply_layered_material(obj, FIG6, "osl")
+        bpy.context.scene.cycles.shading_system = True
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", OSLSceneWarning)
+            apply_layered_material(obj, FIG6, "osl")
+    finally:
+        freshness.uninstall()

@@ -28,8 +28,8 @@ from .material_values import check_local, is_layered, layered_material_of, legac
 from .own_nodes import shader_node
 from .slots import remove_layered_material
 from .sockets import check_node
-from .stored_keys import (BACKEND_KEY, BUILD_KEY, CHOSEN_PLAN_KEY, SYNC_KEY, recorded_settings, setting_specs,
-                          settings_record)
+from .stored_keys import (BACKEND_KEY, BUILD_KEY, CHOSEN_PLAN_KEY, SETTINGS, SYNC_KEY, recorded_settings,
+                          setting_specs, settings_record)
 
 _suspended = 0
 
@@ -131,6 +131,24 @@ def adopt(mat, keep: str | None = None) -> None:
         if "backend" in values and keep != "backend":
             policy.check_backend(values["backend"])
             st.backend = values["backend"]
+        st.adopted = True
+
+
+def follow_build(mat) -> None:
+    """The material's settings (the panel's, where the add-on is registered) set to what its last build
+    recorded, so that a script's :func:`~.build.apply_layered_material` with another backend or other
+    options is what the handlers keep, not what the panel said before."""
+    st = getattr(mat, SETTINGS, None)
+    if st is None:
+        return
+    values = recorded_settings(mat)
+    backend = mat.get(BACKEND_KEY)
+    with suspended_updates():
+        for name, value in values.items():
+            if getattr(st, name) != value or not st.is_property_set(name):
+                setattr(st, name, value)
+        if backend in policy.BACKENDS and st.backend != backend:
+            st.backend = backend
         st.adopted = True
 
 
