@@ -6,6 +6,7 @@ Nothing here imports bpy.
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,8 +14,10 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from ..model.errors import ParameterError
 from ..model.params import LayeredParams
 from ..model.sphere import OrthoCamera, Sun
+from .option_values import MAX_RESOLUTION, shown
 from .staging import OutputPaths, output_stem
 
 SIDECAR_FORMAT = "layered-brdf render"
@@ -59,10 +62,46 @@ def camera_to_dict(camera) -> dict[str, Any]:
             "distance": camera.distance, "matrix_world": camera.matrix_world()}
 
 
+def _number(name: str, value: Any, allowed: str, ok=lambda x: True) -> float:
+    """A finite JSON number of a sidecar's field ``name`` for which ``ok`` holds; ParameterError naming it."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or not ok(value):
+        raise ParameterError(name, shown(value), allowed)
+    return float(value)
+
+
+def _direction(name: str, value: Any) -> tuple[float, float, float]:
+    """Three finite numbers whose direction can be taken (length above 1e-9, its square finite)."""
+    allowed = "three finite numbers, not all zero (a direction)"
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise ParameterError(name, shown(value), allowed)
+    xyz = tuple(_number(name, c, allowed) for c in value)
+    n2 = math.fsum(c * c for c in xyz)
+    if not math.isfinite(n2) or n2 < 1e-18:
+        raise ParameterError(name, shown(value), allowed)
+    return xyz  # type: ignore[return-value]
+
+
+def _pixels(name: str, value: Any) -> int:
+    allowed = f"a whole number of pixels in [1, {MAX_RESOLUTION}]"
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_RESOLUTION:
+        raise ParameterError(name, shown(value), allowed)
+    return value
+
+
 def camera_from_dict(d: Mapping[str, Any]) -> OrthoCamera:
-    return OrthoCamera(view=tuple(d["view"]), ortho_scale=float(d["ortho_scale"]), width=int(d["width"]),
-                       height=int(d["height"]), target=tuple(d.get("target", (0.0, 0.0, 0.0))),
-                       distance=float(d.get("distance", 10.0)))
+    """The recorded orthographic camera; ParameterError naming the field that no camera can have."""
+    if not isinstance(d, Mapping):
+        raise ParameterError("camera", shown(d), "a mapping (the sidecar's camera)")
+    target = d.get("target", (0.0, 0.0, 0.0))
+    if not isinstance(target, (list, tuple)) or len(target) != 3:
+        raise ParameterError("camera.target", shown(target), "three finite numbers (a point)")
+    return OrthoCamera(view=_direction("camera.view", d.get("view")),
+                       ortho_scale=_number("camera.ortho_scale", d.get("ortho_scale"), "a finite number > 0",
+                                           lambda x: x > 0),
+                       width=_pixels("camera.width", d.get("width")), height=_pixels("camera.height", d.get("height")),
+                       target=tuple(_number("camera.target", c, "three finite numbers (a point)") for c in target),
+                       distance=_number("camera.distance", d.get("distance", 10.0), "a finite number > 0",
+                                        lambda x: x > 0))
 
 
 def sun_to_dict(sun) -> dict[str, Any]:
@@ -70,7 +109,21 @@ def sun_to_dict(sun) -> dict[str, Any]:
 
 
 def sun_from_dict(d: Mapping[str, Any]) -> Sun:
-    return Sun(direction=tuple(d["direction"]), strength=float(d["strength"]))
+    """The recorded sun; ParameterError naming the field that no sun can have."""
+    if not isinstance(d, Mapping):
+        raise ParameterError("sun", shown(d), "a mapping (the sidecar's sun)")
+    return Sun(direction=_direction("sun.direction", d.get("direction")),
+               strength=_number("sun.strength", d.get("strength"), "a finite number > 0 (W/m^2)", lambda x: x > 0))
+
+
+def _centers(value: Any) -> tuple:
+    allowed = "a non-empty list of sphere centres, each three finite numbers"
+    if not isinstance(value, (list, tuple)) or not value:
+        raise ParameterError("centers", shown(value), allowed)
+    for c in value:
+        if not isinstance(c, (list, tuple)) or len(c) != 3:
+            raise ParameterError("centers", shown(value), allowed)
+    return tuple(tuple(_number("centers", x, allowed) for x in c) for c in value)
 
 
 @dataclass
@@ -92,5 +145,8 @@ def scene_from_sidecar(data: Mapping[str, Any]) -> SidecarScene:
         params = [LayeredParams.from_dict(t["params"]) for t in data["tiles"]]
     else:
         params = [LayeredParams.from_dict(data["params"])]
-    centers = tuple(tuple(c) for c in data["centers"])
+    centers = _centers(data.get("centers"))
+    if len(centers) != len(params):
+        raise ParameterError("centers", shown(data.get("centers")),
+                             f"one centre per sphere ({len(params)} in this sidecar)")
     return SidecarScene(params, camera_from_dict(data["camera"]), sun_from_dict(data["sun"]), centers)
