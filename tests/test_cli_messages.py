@@ -278,3 +278,15 @@ def test_a_params_file_and_typed_options_are_checked_as_one_set(tmp_path, monkey
     kept = request_from_options({"params": "params.json", "lower_medium": "water", "r2_r": 1.2, "d_max": 400,
                                  "output": "x"}).params
     assert kept.r2_r == 1.2
+
+
+@pytest.mark.parametrize("options, name, needs", [
+    ({"preset": "oil_slick", "r1_r": 3, "r1_g": 3, "r1_b": 3}, "r1_r", "layer_index 'channels'"),
+    ({"preset": "fig4_parallel", "layer_ior": 1.6}, "layer_ior", "layer_index 'ior'"),
+])
+def test_a_value_the_material_would_not_use_is_refused(options, name, needs):
+    with pytest.raises(ParameterError, match=f"{name}.*used only with {needs}"):
+        request_from_options({**options, "output": "x"})
+    enum, option = needs.split(" ")
+    req = request_from_options({**options, enum: option.strip("'"), "output": "x"})
+    assert getattr(req.params, name) == options[name]

@@ -189,6 +189,7 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
     if file_values or overrides:
         try:
             params = LayeredParams.from_dict(merged_values(file_values, overrides), base=params)
+            params.check_used(overrides)
         except ParameterError as e:
             raise from_file(e, file_values, label, overridden=overrides) from None
         overrides = {k: getattr(params, k) for k in overrides}

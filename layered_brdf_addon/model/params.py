@@ -328,6 +328,17 @@ class LayeredParams:
             raise ParameterError("d_min", self.d_min, f"at most d_max = {self.d_max:g} nm")
         return self
 
+    def check_used(self, given) -> None:
+        """ParameterError naming the first of ``given`` (values a user gave, by name) that this material does not
+        use: one used only under another option of an enum parameter (the three indices with Layer index 'ior')."""
+        for name, value in given.items():
+            spec = self.spec(name)
+            if spec.used_with and getattr(self, spec.used_with[0]) != spec.used_with[1]:
+                enum, option = spec.used_with
+                raise ParameterError(name, value,
+                                     f"a value this material uses: {name} is used only with {enum} '{option}', "
+                                     f"and its {enum} is '{getattr(self, enum)}' (give {enum} '{option}' too)")
+
     # convenience views ---------------------------------------------------
     @property
     def r1(self) -> tuple[float, float, float]:
