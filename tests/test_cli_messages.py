@@ -290,3 +290,11 @@ def test_a_value_the_material_would_not_use_is_refused(options, name, needs):
     enum, option = needs.split(" ")
     req = request_from_options({**options, enum: option.strip("'"), "output": "x"})
     assert getattr(req.params, name) == options[name]
+
+
+@pytest.mark.parametrize("option, name", [("--k2-g", "k2_g"), ("--samples", "samples"), ("--d-max", "d_max")])
+def test_digits_grouped_by_underscores_are_no_number(tmp_path, monkeypatch, capsys, option, name):
+    monkeypatch.chdir(tmp_path)
+    err = _refused(["render", "--preset", "oil_slick", option, "1_5", "--output", "x"], capsys)
+    assert f"parameter '{name}' = '1_5'" in err
+    assert list(tmp_path.iterdir()) == []

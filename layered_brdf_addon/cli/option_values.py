@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..model import policy
-from ..model.params import PARAM_SPECS, ParameterError
+from ..model.params import PARAM_SPECS, ParameterError, as_number
 from ..model.presets import PRESETS
 
 PARAM_NAMES = tuple(s.name for s in PARAM_SPECS)
@@ -154,7 +154,8 @@ def int_option(name: str, value: Any, lo: int, hi: int) -> int:
     if isinstance(value, bool):
         raise ParameterError(name, value, allowed)
     try:
-        x = int(value) if not isinstance(value, float) else (int(value) if value.is_integer() else None)
+        x = None if isinstance(value, str) and "_" in value else \
+            int(value) if not isinstance(value, float) else (int(value) if value.is_integer() else None)
     except (TypeError, ValueError):
         x = None
     if x is None or not lo <= x <= hi:
@@ -167,7 +168,7 @@ def float_option(name: str, value: Any, lo: float = -math.inf, hi: float = math.
     if isinstance(value, bool):
         raise ParameterError(name, value, allowed)
     try:
-        x = float(value)
+        x = as_number(value)
     except (TypeError, ValueError):
         raise ParameterError(name, value, allowed) from None
     if not math.isfinite(x) or not lo <= x <= hi:

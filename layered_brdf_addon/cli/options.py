@@ -13,7 +13,7 @@ import re
 import sys
 from typing import Any, Iterator
 
-from ..model.params import PARAM_SPECS, ParamSpec
+from ..model.params import PARAM_SPECS, ParamSpec, as_number
 
 EXIT_OK, EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -36,7 +36,7 @@ class ArgumentParser(argparse.ArgumentParser):
 def _number(text: str) -> Any:
     """A float where the text is a number; the text itself otherwise (validation names it)."""
     try:
-        return float(text)
+        return as_number(text)
     except ValueError:
         return text
 

@@ -72,12 +72,20 @@ class ParamSpec:
         if isinstance(value, bool):
             raise ParameterError(self.name, value, self.allowed)
         try:
-            x = float(value)
+            x = as_number(value)
         except (TypeError, ValueError):
             raise ParameterError(self.name, value, self.allowed) from None
         if not math.isfinite(x) or x < self.min or x > self.max:
             raise ParameterError(self.name, value, self.allowed)
         return x
+
+
+def as_number(value: Any) -> float:
+    """``float(value)``, refusing text that Python reads as a number but a person does not write as one:
+    digits grouped by underscores (``"1_5"`` is not 15)."""
+    if isinstance(value, str) and "_" in value:
+        raise ValueError(f"not a number: {value!r}")
+    return float(value)
 
 
 def _fmt(x: float) -> str:
