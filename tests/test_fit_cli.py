@@ -310,6 +310,8 @@ BAD_INPUTS = {
     "reflectance above 1": (_table("angle,channel,reflectance\n0,r,0.5\n0,g,1.5\n0,b,0.5\n"),
                             ["'reflectance'", "line 3", "outside [0, 1]"]),
     "an empty table": (_table("angle,wavelength,reflectance\n"), ["'reflectance'", "empty"]),
+    "two values for one angle and channel": (_table("angle,channel,reflectance\n0,r,0.5\n0,g,0.4\n0,b,0.3\n"
+                                                    "0,r,0.6\n"), ["'reflectance'", "line 5", "line 2"]),
     "an empty file": (_table(""), ["'reflectance'", "empty"]),
     "a missing column": (_table("angle,wavelength,value\n0,500,0.1\n"), ["'reflectance'", "no reflectance column"]),
     "too few cells": (_table("angle,wavelength,reflectance\n0,500\n"), ["'reflectance'", "line 2", "2 cells"]),

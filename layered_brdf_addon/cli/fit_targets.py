@@ -254,7 +254,7 @@ def load_reflectance_target(source: Source) -> LoadedTarget:
     try:
         target = ReflectanceTarget.from_rows(rows)
     except FitTargetError as e:
-        why = re.sub(r"^row (\d+)", lambda m: f"line {numbers[int(m.group(1)) - 1]}", str(e))
+        why = re.sub(r"\brow (\d+)", lambda m: f"line {numbers[int(m.group(1)) - 1]}", str(e))
         raise ParameterError("reflectance", label, f"{REFLECTANCE_ALLOWED} ({why})") from None
     record = {"kind": "reflectance", "file": source.path.absolute(), "rows": len(rows),
               "angles": [float(a) for a in target.angles]}

@@ -389,7 +389,14 @@ class ReflectanceTarget:
                 slot = _number(where, "channel or wavelength", i)
                 if not 200.0 <= slot <= 2000.0:
                     raise TargetError(f"row {i}: wavelength {slot:g} nm is outside [200, 2000] nm")
-            by_angle.setdefault(angle, {})[slot] = value
+            seen = by_angle.setdefault(angle, {})
+            if slot in seen and seen[slot][0] != value:  # the same value twice is a repeat, two are a conflict
+                what = f"channel {key}" if isinstance(slot, int) else f"wavelength {slot:g} nm"
+                raise TargetError(f"row {i}: angle {angle:g}, {what} was given {seen[slot][0]:g} on row "
+                                  f"{seen[slot][1]} and {value:g} here (one value per angle and "
+                                  f"{'channel' if isinstance(slot, int) else 'wavelength'})")
+            seen.setdefault(slot, (value, i))
+        by_angle = {angle: {slot: v for slot, (v, _) in values.items()} for angle, values in by_angle.items()}
         angles, rgb = [], []
         for angle, values in sorted(by_angle.items()):
             rgb.append(_colour_of(angle, values))
