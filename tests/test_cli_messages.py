@@ -298,3 +298,13 @@ def test_digits_grouped_by_underscores_are_no_number(tmp_path, monkeypatch, caps
     err = _refused(["render", "--preset", "oil_slick", option, "1_5", "--output", "x"], capsys)
     assert f"parameter '{name}' = '1_5'" in err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", ["gallery", "lookdev"])
+def test_the_help_gives_the_range_the_error_names(tmp_path, monkeypatch, capsys, command):
+    monkeypatch.chdir(tmp_path)
+    err = _refused([command, "--size", "1", "--output", "x.png"], capsys)
+    allowed = err[err.index("["):err.index("]") + 1]
+    with pytest.raises(SystemExit):
+        cli.main([command, "--help"])
+    assert allowed in " ".join(capsys.readouterr().out.split()), allowed

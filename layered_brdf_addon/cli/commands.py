@@ -27,6 +27,8 @@ from ..model.params import PARAM_SPECS, ParameterError
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 from .fit_command import cmd_fit
 from .fit_options import add_parser as add_fit_parser
+from .gallery import DEFAULT_SIZE as GALLERY_SIZE
+from .gallery import SIZE_RANGE as GALLERY_SIZES
 from .gallery import render_gallery, summary_rows
 from .gallery import settings_from_options as gallery_settings
 from .input_files import FileValueError
@@ -93,7 +95,8 @@ def build_parser() -> argparse.ArgumentParser:
                        + ", ".join(PAPER_PRESETS) + ") as spheres in one scene, one render, and compose "
                        "a labelled contact sheet STEM.png, with STEM.exr and the sidecar STEM.json.")
     g.add_argument("--output", default=None, metavar="PATH", help="the contact sheet (default out/gallery.png)")
-    g.add_argument("--size", default=None, metavar="PX", help="pixels per tile (default 128)")
+    g.add_argument("--size", default=None, metavar="PX", help=f"pixels per tile, an integer in [{GALLERY_SIZES[0]}, "
+                   f"{GALLERY_SIZES[1]}] (default {GALLERY_SIZE})")
     g.add_argument("--columns", default=None, metavar="N", help="tiles per row (default: a square grid)")
     g.add_argument("--presets", nargs="+", default=None, metavar="NAME",
                    help="other presets to show instead of the paper's (any of: "

@@ -11,7 +11,7 @@ from typing import Any
 
 from ..model.params import PARAM_SPECS, LayeredParams, ParameterError
 from ..model.presets import PRESETS, preset
-from .fit_targets import PRINCIPLED_HDRIS, PRINCIPLED_SAMPLES, PRINCIPLED_SIZE
+from .fit_targets import PRINCIPLED_HDRIS, PRINCIPLED_SAMPLES, PRINCIPLED_SAMPLING, PRINCIPLED_SIZE, PRINCIPLED_SIZES
 from .input_files import file_label, from_file, load_params_file, merged_values
 from .option_values import option_flag, path_option, shown
 from .options import param_metavar
@@ -51,9 +51,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
                      "reference sphere under three suns")
     tgt.add_argument("--material", default=None, metavar="NAME", help="the material of --principled")
     tgt.add_argument("--size", default=None, metavar="PX",
-                     help=f"--principled: pixels of each render (default {PRINCIPLED_SIZE})")
+                     help=f"--principled: pixels of each render, an integer in [{PRINCIPLED_SIZES[0]}, "
+                     f"{PRINCIPLED_SIZES[1]}] (default {PRINCIPLED_SIZE})")
     tgt.add_argument("--samples", default=None, metavar="N",
-                     help=f"--principled: samples per pixel (default {PRINCIPLED_SAMPLES}, exact under a sun)")
+                     help=f"--principled: samples per pixel, an integer in [{PRINCIPLED_SAMPLING[0]}, "
+                     f"{PRINCIPLED_SAMPLING[1]}] (default {PRINCIPLED_SAMPLES}, exact under a sun)")
     tgt.add_argument("--hdri", nargs="+", default=None, metavar="NAME",
                      help="--principled: Blender's bundled HDRIs the material is also rendered under and fitted "
                           f"to (default {' '.join(PRINCIPLED_HDRIS)}; 'none': the suns only)")

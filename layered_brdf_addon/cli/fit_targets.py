@@ -32,6 +32,8 @@ from .sidecar import SIDECAR_FORMAT, scene_from_sidecar
 from .staging import OutputPaths, output_stem
 
 PRINCIPLED_SIZE = 96
+PRINCIPLED_SIZES = (8, 4096)  # pixels of each render
+PRINCIPLED_SAMPLING = (1, 65536)  # samples per pixel
 PRINCIPLED_SAMPLES = 1
 PRINCIPLED_HDRIS = DEFAULT_HDRIS
 
@@ -265,8 +267,8 @@ def load_reflectance_target(source: Source) -> LoadedTarget:
 def load_principled_target(source: Source, ns: argparse.Namespace, guard) -> LoadedTarget:
     """The Principled BSDF material ``--material`` of the .blend, rendered by Cycles on the
     reference sphere (:func:`layered_brdf_addon.blender.principled_target.principled_views`)."""
-    size = int_option("size", ns.size, 8, 4096) if ns.size is not None else PRINCIPLED_SIZE
-    samples = int_option("samples", ns.samples, 1, 65536) if ns.samples is not None else PRINCIPLED_SAMPLES
+    size = int_option("size", ns.size, *PRINCIPLED_SIZES) if ns.size is not None else PRINCIPLED_SIZE
+    samples = int_option("samples", ns.samples, *PRINCIPLED_SAMPLING) if ns.samples is not None else PRINCIPLED_SAMPLES
     hdri_names = list(PRINCIPLED_HDRIS) if ns.hdri is None else [] if ns.hdri == ["none"] else list(ns.hdri)
     try:
         blend = check_blend_file(source.path)

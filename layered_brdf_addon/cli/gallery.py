@@ -29,6 +29,7 @@ from .staging import InterruptGuard, OutputPaths, output_stem
 
 SPACING = 2.2  # centre distance of neighbouring spheres (unit radius): a 10% margin per tile
 DEFAULT_SIZE = 128
+SIZE_RANGE = (16, 4096)  # pixels per tile
 DEFAULT_SAMPLES = 16
 DEFAULT_OUTPUT = Path("out") / "gallery.png"
 ANTIALIAS_FILTER_WIDTH = 1.5  # Blender's default pixel filter, used when there is more than one sample
@@ -205,7 +206,7 @@ def check_preset_lobe(name: str, backend: str) -> None:
 def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     """Validate gallery options (``output``, ``size``, ``samples``, ``backend``, ...) without Blender."""
     o = {k: v for k, v in options.items() if v is not None}
-    size = int_option("size", o.get("size", DEFAULT_SIZE), 16, 4096)
+    size = int_option("size", o.get("size", DEFAULT_SIZE), *SIZE_RANGE)
     samples = int_option("samples", o.get("samples", DEFAULT_SAMPLES), 1, 1_000_000)
     backend = o.get("backend", "nodes")
     policy.check_backend(backend)
