@@ -308,3 +308,22 @@ def test_the_help_gives_the_range_the_error_names(tmp_path, monkeypatch, capsys,
     with pytest.raises(SystemExit):
         cli.main([command, "--help"])
     assert allowed in " ".join(capsys.readouterr().out.split()), allowed
+
+
+def test_a_python_without_blender_s_module_says_which_python_to_use(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    real_import = __builtins__["__import__"] if isinstance(__builtins__, dict) else __builtins__.__import__
+
+    def no_bpy(name, *args, **kwargs):
+        if name == "bpy" or name.startswith("bpy."):
+            raise ModuleNotFoundError("No module named 'bpy'", name="bpy")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr("builtins.__import__", no_bpy)
+    for module in [m for m in sys.modules if m == "bpy" or m.startswith("bpy.")]:
+        monkeypatch.delitem(sys.modules, module)
+    assert cli.main(["render", "--preset", "oil_slick", "--output", "x"]) == cli.EXIT_FAILED
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("\n") == 1
+    assert "has no module 'bpy' (Blender as a Python module)" in err and ".venv-5.2/bin/python -m layered_brdf_addon" in err
+    assert list(tmp_path.iterdir()) == []

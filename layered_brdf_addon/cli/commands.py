@@ -285,6 +285,15 @@ def normalise_argv(argv: Sequence[str]) -> list[str]:
     return argv
 
 
+def missing_module(e: ModuleNotFoundError) -> str:
+    """What to do when this Python lacks a module the command needs (``bpy``: Blender's)."""
+    what = "module 'bpy' (Blender as a Python module)" if e.name == "bpy" else f"module '{e.name}'"
+    return (f"this Python ({sys.executable}, Python {sys.version.split()[0]}) has no {what}: run layered-brdf with "
+            "the Python that 'make' sets up (.venv-5.2/bin/python -m layered_brdf_addon ..., or "
+            ".venv-5.2/bin/layered-brdf; 'make which' names it), or install the package there with "
+            "pip install -e . (bpy 5.2.3 needs Python 3.13, bpy 5.0.1 Python 3.11)")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``python -m layered_brdf_addon`` and ``layered-brdf``; returns the exit code."""
     argv = normalise_argv(sys.argv[1:] if argv is None else argv)
@@ -308,6 +317,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERRUPTED
     except WriteError as e:
         return _write_failed(e)
+    except ModuleNotFoundError as e:  # run by a Python without Blender's module (the system's, say)
+        print(f"{PROG}: error: {missing_module(e)}", file=sys.stderr)
+        return EXIT_FAILED
     except Exception as e:  # a render that Blender could not do: report it, exit 1
         if isinstance(e, OSError) and e.errno in FULL_DISK_ERRNOS:
             return _write_failed(write_error(e))
