@@ -20,6 +20,7 @@ import pytest
 from layered_brdf_addon.cli import commands as cli
 from layered_brdf_addon.cli import gallery, render_job
 from layered_brdf_addon.cli.job_files import load_job_file
+from layered_brdf_addon.cli.option_values import unit_notes
 from layered_brdf_addon.cli.input_files import FileValueError
 from layered_brdf_addon.cli.requests import request_from_options
 from layered_brdf_addon.cli.staging import WriteError, writing
@@ -327,3 +328,14 @@ def test_a_python_without_blender_s_module_says_which_python_to_use(tmp_path, mo
     assert "Traceback" not in err and err.count("\n") == 1
     assert "has no module 'bpy' (Blender as a Python module)" in err and ".venv-5.2/bin/python -m layered_brdf_addon" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_thickness_typed_in_micrometres_or_picometres_gets_a_note(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["render", "--preset", "oil_slick", "--d-min", "0.1", "--d-max", "0.6", "--resolution", "16",
+                     "--output", "x"]) == cli.EXIT_OK
+    err = capsys.readouterr().err
+    assert "note: --d-min 0.1 is 0.1 nm" in err and "--d-max 600" in err
+    assert unit_notes({"d_min": 150000.0}) == ["--d-min 150000 is 150 micrometres: thickness is in nm; if you "
+                                               "meant picometres, that is --d-min 150"]
+    assert unit_notes({"d_min": 0.0, "d_max": 600.0, "ks": 0.5}) == []

@@ -35,7 +35,7 @@ from .input_files import FileValueError
 from .job_files import load_job_file
 from .lookdev import DEFAULT_OUTPUT, DEFAULT_SAMPLES, DEFAULT_SIZE, SAMPLES_RANGE, SIZE_RANGE, render_lookdev
 from .lookdev import settings_from_options as lookdev_settings
-from .option_values import PARAM_NAMES, float_option, int_option
+from .option_values import PARAM_NAMES, float_option, int_option, unit_notes
 from .options import (EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK, ArgumentParser, add_param_options,
                       blender_output)
 from .render_job import execute_render
@@ -185,6 +185,8 @@ def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``render``: validate, then render one request in this process."""
     follow_parent()
     req = request_from_options(_options(ns, RUN_OPTIONS + PARAM_NAMES))
+    for note in unit_notes(dict(req.overrides)):
+        print(f"{PROG}: note: {note}", file=sys.stderr)
     with blender_output(ns.verbose):
         sidecar = execute_render(req, command=[sys.executable, "-m", "layered_brdf_addon", *argv])
     p = req.paths

@@ -220,3 +220,28 @@ def path_option(name: str, value: Any, allowed: str) -> Path:
     if not isinstance(value, str) or not value.strip() or "\x00" in value or len(value) > MAX_TEXT:
         raise ParameterError(name, shown(value), allowed)
     return Path(value).expanduser()
+
+
+# Thicknesses a person is unlikely to mean in nm: thinner than a molecule (micrometres typed), or
+# thicker than a tenth of a millimetre (picometres typed).
+MICROMETRES_BELOW_NM = 1.0
+PICOMETRES_FROM_NM = 1.0e5
+
+
+def unit_notes(values: dict) -> list[str]:
+    """Notes on typed values of nm parameters that look like another unit (``values``: by parameter name):
+    ``--d-max 0.6`` is 0.6 nm, where 600 nm was probably meant."""
+    notes = []
+    for name, value in values.items():
+        spec = next((s for s in PARAM_SPECS if s.name == name), None)
+        if spec is None or spec.unit != "nm" or isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        flag = "--" + name.replace("_", "-")
+        if 0.0 < value < MICROMETRES_BELOW_NM:
+            notes.append(f"{flag} {value:g} is {value:g} nm (thinner than a molecule): thickness is in nm, "
+                         f"so {value * 1000:g} nm is {flag} {value * 1000:g}")
+        elif value >= PICOMETRES_FROM_NM:
+            notes.append(f"{flag} {value:g} is {value / 1000:g} micrometres: thickness is in nm; if you meant "
+                         f"picometres, that is {flag} {value / 1000:g}")
+    return notes
+
