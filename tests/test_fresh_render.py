@@ -21,6 +21,7 @@ from layered_brdf_addon.blender.material_values import settings
 from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, render_passes_osl,
                                               reset_blender)
 from layered_brdf_addon.blender.stored_keys import BACKEND_KEY, CHOSEN_PLAN_KEY
+from layered_brdf_addon.blender.sync import sync_material
 from layered_brdf_addon.model import preset
 from layered_brdf_addon.model.plan import EffectPlan
 from layered_brdf_addon.model.policy import plan_effects
@@ -214,5 +215,16 @@ def test_an_osl_material_in_a_scene_that_renders_it_black_says_how_to_fix_it():
         with warnings.catch_warnings():
             warnings.simplefilter("error", OSLSceneWarning)
             apply_layered_material(obj, FIG6, "osl")
+    finally:
+        freshness.uninstall()
+
+
+def test_sync_material_works_where_the_add_on_is_not_registered():
+    obj = _scene(False, "nodes")
+    try:
+        mat = apply_layered_material(obj, FIG6.replace(accuracy="analytic"), "nodes")
+        shader_node(mat).inputs["Thickness Max"].default_value = 120.0
+        assert sync_material(mat) is True  # rebaked for the new value, the build's settings kept
+        assert settings(mat).accuracy == "analytic" and sync_material(mat) is False
     finally:
         freshness.uninstall()
