@@ -12,12 +12,13 @@ import pytest
 from layered_brdf_addon.fit.cycles_closures import evaluate_closures
 from layered_brdf_addon.model import ops_numpy, preset, program
 from layered_brdf_addon.model.ops_numpy import vec
-from layered_brdf_addon.model.policy import plan_effects
+from layered_brdf_addon.model.policy import plan_effects, render_plan, tables_fallback
 from layered_brdf_addon.model.presets import ARTIST_PRESETS
 from layered_brdf_addon.model.shading.tables import NotTabulable
 from layered_brdf_addon.model.table_bake import (MAX_TABLE_BYTES, bake, table_digest, table_layout,
                                                  tabulated_result)
 from layered_brdf_addon.model.sphere import shading_point
+from layered_brdf_addon.model.table_check import PROBE_POINTS, PROBE_SEED, check_tables
 
 # Tables vs computed closures at random points, lights within three lobe widths of the mirror
 # direction (where the sharp lobes' light is): the L1 difference of the light leaving, and the
@@ -186,3 +187,45 @@ def test_one_channel_closures_are_packed_four_values_to_an_image(name, images):
     assert texels.shape[0] == images
     used = {image for image, _ in slots} | ({layout.transmittance_image} if layout.transmittance == "own" else set())
     assert used == set(range(layout.diffuse_image + 1, layout.images))  # no image packed empty
+
+
+# Values whose tables cannot hold the program (total internal reflection in the layer, fringes finer than
+# the rows resolve), from every accuracy mode; a material asking for tables computes these per point.
+SWEEP = {
+    **{f"r0 {r0} over r1 {r1}": preset("fig4_parallel").replace(optics="physical", r0=r0, layer_index="channels",
+                                                                r1_r=r1, r1_g=r1, r1_b=r1)
+       for r0, r1 in ((5.0, 1.0), (2.0, 1.45), (1.7, 1.0), (1.7, 1.45), (1.0, 1.45), (1.33, 1.5))},
+    **{f"oil {lo / 1000:g}-{hi / 1000:g} um {acc}": preset("oil_slick").replace(accuracy=acc, d_min=lo, d_max=hi)
+       for lo, hi in ((3000.0, 3500.0), (9000.0, 10000.0)) for acc in ("rgb", "analytic", "spectral8", "spectral32")},
+    "soap 0-10 um": preset("soap_bubble").replace(d_min=0.0, d_max=10000.0),
+    "oil paper 9-10 um": preset("oil_slick").replace(optics="paper", d_min=9000.0, d_max=10000.0),
+}
+
+
+@pytest.mark.parametrize("name", list(SWEEP))
+def test_tables_hold_the_program_wherever_a_material_uses_them(name):
+    """Where the plan a material is built with reads tables, they hold the program at probes the bake never
+    checked (another seed, twice as many); elsewhere the material says why it computes per point."""
+    p = SWEEP[name]
+    asked, plan = plan_effects(p), render_plan(p)
+    if plan.tables:
+        layout, texels = bake(p, plan)
+        check = check_tables(p, plan, layout, texels, points=2 * PROBE_POINTS, seed=PROBE_SEED + 1)
+        print(f"{name}: tables, L1 {100 * check.l1:.2f}%, {100 * check.failing:.2f}% off")
+        assert check.holds, check
+    else:
+        why = tables_fallback(p)
+        print(f"{name}: per point ({why or 'no tables asked'})")
+        assert bool(why) == asked.tables
+
+
+@pytest.mark.parametrize("name", ["r0 5.0 over r1 1.0", "r0 1.7 over r1 1.0", "oil 9-10 um rgb", "oil 3-3.5 um rgb"])
+def test_tables_that_would_not_hold_are_not_used(name):
+    p = SWEEP[name]
+    assert plan_effects(p).tables and not render_plan(p).tables and "computed per point" in tables_fallback(p)
+
+
+@pytest.mark.parametrize("name", list(MODES))
+def test_every_preset_and_mode_keeps_its_tables(name):
+    p = MODES[name]
+    assert render_plan(p).tables == plan_effects(p).tables, tables_fallback(p)

@@ -15,7 +15,7 @@ from ..model import policy
 from ..model.base_layers import base_node
 from ..model.params import THICKNESS_SOCKET, LayeredParams, ParameterError, group_socket_name, iter_sockets
 from ..model.plan import EffectPlan
-from ..model.policy import plan_effects
+from ..model.policy import render_plan
 from ..model.table_bake import table_layout
 from . import osl as osl_backend
 from .animation import animated_parameters, restore_animation, stash_animation
@@ -41,7 +41,7 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     Idempotent: applying again reuses the material and the node group, rebuilds the
     material's tree only when the backend or the plan of active effects changed, and
     otherwise only writes the parameter values into the shader's input sockets.
-    ``plan`` defaults to :func:`plan_effects` of ``params`` (``EffectPlan.full()`` gives
+    ``plan`` defaults to :func:`~..model.policy.render_plan` of ``params`` (``EffectPlan.full()`` gives
     the always-full shader); a plan given is kept when the material's values change later (only its
     tables follow them, :mod:`.freshness`).  Returns the material.
     """
@@ -53,7 +53,7 @@ def apply_layered_material(target, params: LayeredParams | None = None, backend:
     policy.check_backend(backend, params.lobe)
     mat = material_for(target, name)
     chosen = plan is not None
-    plan = plan or plan_effects(params, animated_parameters(mat), backend)
+    plan = plan or render_plan(params, animated_parameters(mat), backend)
     if plan.lobe != params.lobe:
         plan = EffectPlan(**{**plan.to_dict(), "lobe": params.lobe})
     node, own = claim(mat)

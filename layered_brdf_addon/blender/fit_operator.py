@@ -29,7 +29,7 @@ from ..fit.free import default_vary
 from ..fit.solve import FitCancelled
 from ..fit.targets import SphereTarget, TargetError
 from ..model.params import LayeredParams, ParameterError
-from ..model.policy import check_backend, plan_effects
+from ..model.policy import check_backend, render_plan
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset_label
 from . import sync, user_presets
 from .animation import animated_parameters
@@ -110,7 +110,7 @@ def apply_fitted(target, params: LayeredParams):
         backend = settings(target).backend
         params = params.validate()
         check_backend(backend, params.lobe)
-        plan = plan_effects(params, animated_parameters(target), backend)
+        plan = render_plan(params, animated_parameters(target), backend)
         mat = sync.apply(target, params, backend, plan, preview=True)
     settings(mat).preset = ""  # fitted values are no preset's
     return mat

@@ -33,7 +33,7 @@ from bpy.app.handlers import persistent
 from ..backends import node_group as node_group_builder
 from ..model.params import LayeredParams, ParameterError
 from ..model.plan import EffectPlan
-from ..model.policy import plan_effects
+from ..model.policy import plan_effects, render_plan
 from ..model.shading.tables import unread_by_tables
 from . import osl as osl_backend
 from . import sync
@@ -122,7 +122,7 @@ def _freshen_copy(mat, node, base: LayeredParams) -> bool:
     """A copy ``node`` in ``mat`` of a shader node, built for its own values: the group its plan calls for
     (per point where its values cannot be tabulated), tables baked for them."""
     params = read_inputs(node, base=base)
-    plan = plan_effects(params, animated_parameters(mat, node), "nodes")
+    plan = render_plan(params, animated_parameters(mat, node), "nodes")
     changed = False
     if not node_group_builder.is_current(node.node_tree, plan):
         node.node_tree = group_for(plan, params)

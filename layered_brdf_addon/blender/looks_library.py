@@ -17,7 +17,7 @@ import bpy
 
 from ..cli.staging import InterruptGuard
 from ..model.params import ParameterError
-from ..model.policy import plan_effects
+from ..model.policy import render_plan
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 from . import assets, library_folder, sync, user_presets
 from .catalogs import CATALOG_FILE
@@ -90,7 +90,7 @@ def _make_looks(names: dict[str, str], made: list, step) -> None:
         made.append(mat)
         mat.node_tree.nodes.clear()  # the default Principled BSDF is not part of the look
         mat[MATERIAL_KEY] = True
-        sync.apply(mat, params, "nodes", plan_effects(params), preview=False)
+        sync.apply(mat, params, "nodes", render_plan(params), preview=False)
         settings(mat).preset = ident
         if mat.name != name:
             raise RuntimeError(f"the look '{name}' was named '{mat.name}'")

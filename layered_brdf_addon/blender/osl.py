@@ -17,7 +17,7 @@ from ..backends.node_group import code_without_docs
 from ..backends.osl_shader import shader_source, tabulated_shader_source
 from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
-from ..model.table_bake import bake
+from ..model.table_check import checked_bake
 from . import paths, tempdirs
 from .stored_keys import TEXT_KEY
 from .tables import wanted_digest
@@ -91,7 +91,7 @@ def _tables_text(plan: EffectPlan, params: LayeredParams):
     for text in bpy.data.texts:
         if text.library is None and text.get(TABLES_KEY) == digest and text_intact(text):
             return text
-    layout, texels = bake(params, plan)
+    layout, texels, _ = checked_bake(params, plan)  # the bake its plan was checked with
     src = tabulated_shader_source(plan, layout, texels)
     text = bpy.data.texts.new(f"layered_brdf_{plan.key}_{digest[-8:]}.osl")
     text.from_string(src)

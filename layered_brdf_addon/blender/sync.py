@@ -20,7 +20,7 @@ from bpy.app.handlers import persistent
 from ..model import policy
 from ..model.params import LayeredParams, ParameterError
 from ..model.plan import EffectPlan
-from ..model.policy import plan_effects
+from ..model.policy import render_plan
 from . import assets
 from .animation import animated_parameters
 from .build import apply_layered_material, tree_current
@@ -61,7 +61,7 @@ def desired(mat) -> tuple[LayeredParams, str, EffectPlan]:
     params = params_of(mat)
     backend = settings(mat).backend
     policy.check_backend(backend, params.lobe)
-    return params, backend, plan_effects(params, animated_parameters(mat), backend)
+    return params, backend, render_plan(params, animated_parameters(mat), backend)
 
 
 def desired_or_problem(mat) -> tuple[tuple[LayeredParams, str, EffectPlan] | None, str | None]:
@@ -193,7 +193,7 @@ def apply_to_object(obj, params: LayeredParams | None = None, backend: str | Non
         backend = settings(mat).backend if mat is not None else "nodes"
     policy.check_backend(backend, params.lobe)
     animated = animated_parameters(mat) if mat is not None else set()
-    return apply(obj, params, backend, plan_effects(params, animated, backend), preview)
+    return apply(obj, params, backend, render_plan(params, animated, backend), preview)
 
 
 def remove_from_object(obj) -> bool:

@@ -22,7 +22,8 @@ from ..backends import node_group as node_group_builder
 from ..model import ops_numpy, table_bake
 from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
-from ..model.table_bake import bake, spline_coefficients, table_digest, table_layout
+from ..model.table_bake import spline_coefficients, table_digest, table_layout
+from ..model.table_check import checked_bake
 from .stored_keys import settings_record
 
 DIGEST_KEY = "layered_brdf_tables"  # on a group built for tables and on its images: the values they were baked for
@@ -110,7 +111,7 @@ def _new_image(name: str, width: int, height: int):
 def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
     """Bake ``params``'s tables into ``group``'s images (made where missing or of another size, or used
     elsewhere), pack them and stamp images and group."""
-    layout, texels = bake(params, plan)
+    layout, texels, _ = checked_bake(params, plan)  # the bake its plan was checked with
     texels = spline_coefficients(texels, layout)  # what Cubic interpolation reads back as the baked values
     digest = wanted_digest(params, plan)
     nodes = node_group_builder.table_nodes(group)

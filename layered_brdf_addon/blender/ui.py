@@ -8,8 +8,10 @@ from __future__ import annotations
 from bpy.types import Menu, Panel
 
 from ..model.params import PARAM_SPECS
+from ..model.policy import tables_fallback
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset_label
 from . import assets, osl, user_presets
+from .animation import animated_parameters
 from .material_values import is_layered, layered_material_of, settings
 from .own_nodes import shader_node
 from .properties import param_label
@@ -104,11 +106,15 @@ def draw_material(layout, context) -> None:
     if shader_node(mat) is None:
         layout.label(text="The material has no Layered BRDF node: Rebuild restores it", icon="INFO")
     elif wanted is not None:
-        _, _, plan = wanted
+        params, backend, plan = wanted
         col = layout.column(align=True)
         col.label(text=f"Effects ({plan.key}):")
         for line in plan.describe():
             col.label(text=line, icon="DOT")
+        if params.evaluation == "tables" and not plan.tables:
+            why = tables_fallback(params, animated_parameters(mat), backend)
+            if why:  # the tables would not hold the program here: it computes per point
+                col.label(text=why[0].upper() + why[1:], icon="INFO")
 
 
 def draw_asset_row(layout, mat) -> None:

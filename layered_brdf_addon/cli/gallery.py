@@ -17,7 +17,7 @@ import numpy as np
 from ..blender import tempdirs
 from ..model import policy
 from ..model.params import LayeredParams, ParameterError
-from ..model.policy import plan_effects
+from ..model.policy import plan_effects, render_plan
 from ..model.presets import PAPER_PRESETS, preset
 from ..model.sphere import OrthoCamera, Sun
 from .codecs import to_srgb8
@@ -287,7 +287,7 @@ def render_gallery(s: GallerySettings, command: Sequence[str] | None = None,
                 "gallery", scene, paths, backend=s.backend, camera=camera_to_dict(camera), sun=sun_to_dict(sun),
                 centers=centers, render_seconds=render_seconds, t_start=t_start, command=command,
                 tiles=[{"name": t.name, "label": t.label, "box": t.box, "render_box": layout.render_box(k),
-                        "center": t.center, "params": t.params.to_dict(), "plan": plan_effects(t.params).key}
+                        "center": t.center, "params": t.params.to_dict(), "plan": render_plan(t.params).key}
                        for k, t in enumerate(tiles)],
                 layout={"columns": layout.columns, "rows": layout.rows, "size": layout.size,
                         "label_height": layout.label_height, "title_height": layout.title_height,

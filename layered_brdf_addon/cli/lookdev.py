@@ -24,7 +24,7 @@ import numpy as np
 from .. import __version__
 from ..blender import tempdirs
 from ..model.params import ParameterError
-from ..model.policy import plan_effects
+from ..model.policy import render_plan
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
 from .codecs import muted_stderr, save_png
 from .gallery import GalleryLayout, compose_sheet, layout_for
@@ -195,7 +195,7 @@ def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, pro
             bar.close()
         render_seconds = sum(seconds)
         tiles = [{"name": n, "label": labels[k], "box": layout.tile_box(k), "render_box": layout.render_box(k),
-                  "render_seconds": seconds[k], "params": p.to_dict(), "plan": plan_effects(p).key}
+                  "render_seconds": seconds[k], "params": p.to_dict(), "plan": render_plan(p).key}
                  for k, (n, p) in enumerate(zip(s.presets, params))]
         guard.check()
         view = view_settings_record(scene)

@@ -23,7 +23,7 @@ import numpy as np
 from .. import __version__
 from ..blender import tempdirs
 from ..model.params import ParameterError
-from ..model.policy import plan_effects
+from ..model.policy import render_plan, tables_fallback
 from .codecs import exr_beauty, muted_stderr, read_complete_exr_layers, replace_exr_layers, save_png, to_srgb8
 from .requests import RenderRequest
 from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dict, write_json
@@ -251,14 +251,16 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
         paths = req.paths
         # The plan the material was built with: a --blend material's keyframes, drivers and linked
         # sockets keep the effects they may switch on.
-        plan = plan_effects(req.params, animated_parameters(material), req.backend)
+        plan = render_plan(req.params, animated_parameters(material), req.backend)
+        fallback = tables_fallback(req.params, animated_parameters(material), req.backend)
 
         def describe(render_seconds: float) -> dict[str, Any]:
             return sidecar(
                 "blend" if req.blend else "reference", scene, paths, backend=req.backend, camera=camera_info,
                 sun=sun_info, centers=centers, render_seconds=render_seconds, t_start=t_start, command=command,
                 name=req.name, preset=req.preset, params_file=req.params_file, overrides=dict(req.overrides),
-                params=req.params.to_dict(), plan={**plan.to_dict(), "key": plan.key, "describe": plan.describe()},
+                params=req.params.to_dict(), plan={**plan.to_dict(), "key": plan.key, "describe": plan.describe(),
+                      **({"tables_fallback": fallback} if fallback else {})},
                 blend=req.blend, object=req.object, lights=_blend_lights(scene) if req.blend else None,
                 exr_passes=EXR_PASSES, png_view=view_settings_record(scene) if req.blend else None,
                 png_encoding=view_png_encoding(view_settings_record(scene)) if req.blend else PNG_ENCODING)

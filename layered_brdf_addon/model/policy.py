@@ -21,6 +21,7 @@ from .plan import EffectPlan
 from .shading.base_shader import CLEAR_K
 from .shading.tables import tabulable, unread_by_tables
 from .table_bake import fits
+from .table_check import checked_bake
 
 #: The shader backends: a node group of stock nodes, or an OSL shader (Cycles CPU / OptiX).
 BACKENDS = ("nodes", "osl")
@@ -127,6 +128,23 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     if plan.normals == "tilted" and not fits(p, plan):
         return plan
     return replace(plan, tables=True)
+
+
+def render_plan(p: LayeredParams, animated: Iterable[str] = (), backend: str = "nodes") -> EffectPlan:
+    """The plan a material is built with: :func:`plan_effects`, computed per point where its baked tables would
+    not hold the program (:mod:`.table_check`: total internal reflection in the layer, fringes finer than the
+    tables resolve).  Baking checks itself once per set of values (kept for the bake that follows)."""
+    plan = plan_effects(p, animated, backend)
+    if plan.tables and not checked_bake(p, plan)[2].holds:
+        return replace(plan, tables=False)
+    return plan
+
+
+def tables_fallback(p: LayeredParams, animated: Iterable[str] = (), backend: str = "nodes") -> str:
+    """Why a material that asks for baked tables computes per point because they would not hold the program
+    (empty where it uses them, or its plan has none for another reason)."""
+    plan = plan_effects(p, animated, backend)
+    return checked_bake(p, plan)[2].why() if plan.tables else ""
 
 
 def beam_contrast(p: LayeredParams) -> float:
