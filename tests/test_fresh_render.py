@@ -16,6 +16,7 @@ import pytest
 import layered_brdf_addon
 from layered_brdf_addon.backends.node_group import PLAN_KEY
 from layered_brdf_addon.blender import freshness
+from layered_brdf_addon.blender.osl import compile_script_node
 from layered_brdf_addon.blender.material import OSLSceneWarning, apply_layered_material, shader_node
 from layered_brdf_addon.blender.material_values import settings
 from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_passes, render_passes_osl,
@@ -31,6 +32,8 @@ pytestmark = pytest.mark.slow
 FIG6 = preset("fig6_medium")  # baked tables by default; a tilted boundary
 EDITED = {"Thickness Max": (FIG6.d_max, 300.0), "Thickness Min": (FIG6.d_min, 150.0)}  # max first: min <= max
 HEIGHT = 40
+OIL = preset("oil_slick").replace(e0=300.0, e1=400.0)  # parallel boundaries (tables in OSL too), a wide highlight
+OIL_EDITED = {"Thickness Max": 700.0, "Thickness Min": 400.0}
 
 
 def _scene(registered: bool, backend: str):
@@ -54,12 +57,14 @@ def _off(img: np.ndarray, ref: np.ndarray) -> float:
 
 @pytest.fixture(scope="module")
 def references():
-    """The material applied with the edited values, per backend; the handlers off again afterwards."""
+    """The materials applied with the edited values, per backend; the handlers off again afterwards."""
     out = {}
     for backend in ("nodes", "osl"):
-        obj = _scene(False, backend)
-        apply_layered_material(obj, FIG6.replace(d_min=150.0, d_max=300.0), backend)
-        out[backend] = _render(backend)
+        for name, params in (("", FIG6.replace(d_min=150.0, d_max=300.0)),
+                             ("oil ", OIL.replace(d_min=OIL_EDITED["Thickness Min"], d_max=OIL_EDITED["Thickness Max"]))):
+            obj = _scene(False, backend)
+            apply_layered_material(obj, params, backend)
+            out[name + backend] = _render(backend)
     freshness.uninstall()
     yield out
     reset_blender()
@@ -106,9 +111,13 @@ def test_every_edit_path_renders_the_edited_material(references, path, registere
 
 
 def _copy_of(node, tree):
-    """What Shift+D makes: a node of the same group with its stamps and socket values."""
-    copy = tree.nodes.new("ShaderNodeGroup")
-    copy.node_tree = node.node_tree
+    """What Shift+D makes: a node of the same group or script with its stamps and socket values."""
+    copy = tree.nodes.new(node.bl_idname)
+    if node.bl_idname == "ShaderNodeGroup":
+        copy.node_tree = node.node_tree
+    else:
+        copy.mode = "INTERNAL"
+        compile_script_node(copy, script=node.script)
     for key in node.keys():
         copy[key] = node[key]
     for sock in node.inputs:
@@ -117,14 +126,15 @@ def _copy_of(node, tree):
     return copy
 
 
-@pytest.mark.parametrize("registered", [False, True], ids=["script", "registered"])
-@pytest.mark.parametrize("where", ["same material", "another material"])
-def test_a_copy_of_the_node_renders_its_own_values(references, where, registered):
-    obj = _scene(registered, "nodes")
+@pytest.mark.parametrize("backend, registered, where", [
+    ("nodes", False, "same material"), ("nodes", True, "same material"), ("nodes", False, "another material"),
+    ("nodes", True, "another material"), ("osl", False, "same material"), ("osl", True, "another material")])
+def test_a_copy_of_the_node_renders_its_own_values(references, backend, registered, where):
+    obj = _scene(registered, backend)
     try:
-        mat = apply_layered_material(obj, FIG6, "nodes")
+        mat = apply_layered_material(obj, OIL, backend)  # parallel boundaries: tables in both backends
         original = shader_node(mat)
-        group = original.node_tree
+        runs = original.node_tree if backend == "nodes" else original.script
         if where == "same material":
             tree = mat.node_tree
         else:
@@ -134,12 +144,13 @@ def test_a_copy_of_the_node_renders_its_own_values(references, where, registered
             obj.material_slots[0].material = artist
             tree = artist.node_tree
         copy = _copy_of(original, tree)
-        for name, (_, value) in EDITED.items():
+        for name, value in OIL_EDITED.items():
             copy.inputs[name].default_value = value
         out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
         tree.links.new(copy.outputs[0], out.inputs[0])
-        assert _off(_render("nodes"), references["nodes"]) == 0.0
-        assert shader_node(mat) == original and original.node_tree == group  # the original keeps its own
+        assert _off(_render(backend), references["oil " + backend]) == 0.0
+        assert shader_node(mat) == original  # the original keeps its own
+        assert (original.node_tree if backend == "nodes" else original.script) == runs
     finally:
         layered_brdf_addon.unregister() if registered else freshness.uninstall()
 

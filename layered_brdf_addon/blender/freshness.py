@@ -33,7 +33,7 @@ from bpy.app.handlers import persistent
 from ..backends import node_group as node_group_builder
 from ..model.params import LayeredParams, ParameterError
 from ..model.plan import EffectPlan
-from ..model.policy import plan_effects, render_plan
+from ..model.policy import render_plan
 from ..model.shading.tables import unread_by_tables
 from . import osl as osl_backend
 from . import sync
@@ -98,31 +98,46 @@ def freshen(mat) -> bool:
 
 
 # --- copies of the shader node -------------------------------------------------------------------
+def _baked_source(node):
+    """The node group or OSL text holding baked tables that ``node`` runs, or None."""
+    if node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and DIGEST_KEY in node.node_tree:
+        return node.node_tree
+    if node.bl_idname == "ShaderNodeScript" and node.script is not None and osl_backend.TABLES_KEY in node.script:
+        return node.script
+    return None
+
+
 def _owners() -> dict:
-    """{group: a layered material whose shader node runs it} for the groups that read baked tables."""
+    """{group or text: a layered material whose shader node runs it} for those holding baked tables."""
     owners = {}
     for mat in sync.editable_layered_materials():
-        node = shader_node(mat)
-        if node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and DIGEST_KEY in node.node_tree:
-            owners.setdefault(node.node_tree.as_pointer(), mat)
+        source = _baked_source(shader_node(mat))
+        if source is not None:
+            owners.setdefault(source.as_pointer(), mat)
     return owners
 
 
-def _copy_base(group, owners) -> LayeredParams | None:
-    """The settings a copy of a shader node running ``group`` takes: those the tables were baked with (or,
+def _copy_base(source, owners) -> LayeredParams | None:
+    """The settings a copy of a shader node running ``source`` takes: those its tables were baked with (or,
     for tables of older versions, the material whose shader runs them)."""
-    record = baked_settings(group)
+    record = baked_settings(source)
     if record is not None:
         return LayeredParams.from_dict(record)
-    owner = owners.get(group.as_pointer())
+    owner = owners.get(source.as_pointer())
     return None if owner is None else sync.desired(owner)[0]
 
 
 def _freshen_copy(mat, node, base: LayeredParams) -> bool:
-    """A copy ``node`` in ``mat`` of a shader node, built for its own values: the group its plan calls for
-    (per point where its values cannot be tabulated), tables baked for them."""
+    """A copy ``node`` in ``mat`` of a shader node, built for its own values: the group or text its plan calls
+    for (per point where its values cannot be tabulated), tables baked for them."""
     params = read_inputs(node, base=base)
-    plan = render_plan(params, animated_parameters(mat, node), "nodes")
+    backend = "osl" if node.bl_idname == "ShaderNodeScript" else "nodes"
+    plan = render_plan(params, animated_parameters(mat, node), backend)
+    if backend == "osl":
+        changed = osl_backend.ensure_text(node, params, plan, check_sources=False)
+        if changed:
+            set_inputs(node, params)
+        return changed
     changed = False
     if not node_group_builder.is_current(node.node_tree, plan):
         node.node_tree = group_for(plan, params)
@@ -135,9 +150,9 @@ def _freshen_copy(mat, node, base: LayeredParams) -> bool:
 
 def freshen_copies(materials=None) -> int:
     """Give every copy of a layered material's shader node (Shift+D, or its group added by hand, in any local
-    material of ``materials``, default all) that reads baked tables a group and tables of its own values,
-    with the settings its tables were baked with; a copy whose values are its original's keeps the shared
-    tables.  Returns how many copies changed."""
+    material of ``materials``, default all) that reads baked tables a group or OSL text, and tables, of its
+    own values, with the settings its tables were baked with; a copy whose values are its original's keeps
+    the shared tables.  Returns how many copies changed."""
     owners = _owners()
     changed = 0
     for mat in bpy.data.materials if materials is None else materials:
@@ -145,11 +160,11 @@ def freshen_copies(materials=None) -> int:
             continue
         own = shader_node(mat) if sync.editable(mat) else None
         for node in list(mat.node_tree.nodes):
-            if node.bl_idname != "ShaderNodeGroup" or node.node_tree is None or node == own or \
-                    DIGEST_KEY not in node.node_tree:
+            source = _baked_source(node) if node != own else None
+            if source is None:
                 continue
             try:
-                base = _copy_base(node.node_tree, owners)
+                base = _copy_base(source, owners)
                 if base is not None:
                     changed += _freshen_copy(mat, node, base)
             except ParameterError:

@@ -20,7 +20,7 @@ from ..model.plan import EffectPlan
 from ..model.table_check import checked_bake
 from . import paths, tempdirs
 from .stored_keys import TEXT_KEY
-from .tables import wanted_digest
+from .tables import SETTINGS_KEY, settings_json, wanted_digest
 
 TABLES_KEY = "layered_brdf_osl_tables"  # on a text holding baked tables: the digest of what they were baked for
 SOURCE_CRC_KEY = "layered_brdf_osl_crc"  # on such a text: checksum of the source written into it
@@ -97,6 +97,7 @@ def _tables_text(plan: EffectPlan, params: LayeredParams):
     text.from_string(src)
     text[TEXT_KEY] = True
     text[TABLES_KEY] = digest
+    text[SETTINGS_KEY] = settings_json(params)  # what a copy of a node running it takes (.freshness)
     text[SOURCE_CRC_KEY] = _crc(src)
     return text
 

@@ -29,7 +29,7 @@ from .stored_keys import settings_record
 DIGEST_KEY = "layered_brdf_tables"  # on a group built for tables and on its images: the values they were baked for
 IMAGE_SLOT_KEY = "layered_brdf_table_slot"  # on an image: which image of the tables it is
 CHECKSUM_KEY = "layered_brdf_table_crc"  # on an image: checksum of the texels baked into it
-SETTINGS_KEY = "layered_brdf_table_settings"  # on a group built for tables: the settings baked (JSON)
+SETTINGS_KEY = "layered_brdf_table_settings"  # on a group or OSL text holding tables: the settings baked (JSON)
 IMAGE_PREFIX = ".Layered BRDF table"  # a leading "." keeps the images out of Blender's image menus
 
 
@@ -134,13 +134,19 @@ def _write(group, params: LayeredParams, plan: EffectPlan) -> None:
         image[IMAGE_SLOT_KEY] = k
         image[CHECKSUM_KEY] = _checksum(texels[k])
     group[DIGEST_KEY] = digest
-    group[SETTINGS_KEY] = json.dumps(settings_record(params), sort_keys=True)
+    group[SETTINGS_KEY] = settings_json(params)
 
 
-def baked_settings(group) -> dict | None:
-    """The settings (the parameters that are not sockets) ``group``'s tables were baked with, or None."""
+def settings_json(params: LayeredParams) -> str:
+    """What a group or an OSL text holding tables records of the settings they were baked with."""
+    return json.dumps(settings_record(params), sort_keys=True)
+
+
+def baked_settings(source) -> dict | None:
+    """The settings (the parameters that are not sockets) the tables of ``source`` (a group or an OSL text)
+    were baked with, or None."""
     try:
-        record = json.loads(group.get(SETTINGS_KEY, ""))
+        record = json.loads(source.get(SETTINGS_KEY, ""))
     except (TypeError, ValueError):
         return None
     return record if isinstance(record, dict) else None
