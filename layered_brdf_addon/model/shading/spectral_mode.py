@@ -4,7 +4,7 @@ weights (``model/data/spectral_tables.json``), one wavelength after the other.
 """
 from __future__ import annotations
 
-from ..params import WAVELENGTHS_NM
+from ..params import WAVELENGTHS_NM, LayeredParams
 from ..plan import EffectPlan
 from ..spectral_tables import tables
 from .amplitudes import diffuse_rho, film_amplitudes, film_diffuse_rho, lobe_amplitudes
@@ -15,6 +15,13 @@ from .energy import carried
 from .lobes import closure_for
 from .thin_film import optics_settings
 from .values import channels, gather, spread
+
+
+def channel_range(name: str) -> tuple[float, float]:
+    """The range of a per-channel parameter (``r1_r``...), which a wavelength's value mapped through the
+    channels' values is kept within: the parameter table's."""
+    spec = LayeredParams.spec(name)
+    return spec.min, spec.max
 
 
 def spectral_step(ops, acc_R, acc_D, acc_T, r1, lam, m, e0, e1, ks, r0, d, cos_v, cos_ls, cos_ci, tail, through,
@@ -112,7 +119,7 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
         return ops.clamp(k[0] * values[0] + k[1] * values[1] + k[2] * values[2], lo, hi)
 
     def index(j):
-        return through_channels(j, P["r1"], 0.1, 5.0)
+        return through_channels(j, P["r1"], *channel_range("r1_r"))
 
     optics = optics_settings(plan)
 
@@ -120,7 +127,8 @@ def shade_spectral(ops, P, n0, n1, d, v, plan: EffectPlan) -> ShadingResult:
         """The lower medium's n and k at wavelength j, by the same map through the channels' values."""
         if not optics:
             return {}
-        return dict(n2=through_channels(j, P["r2"], 0.01, 10.0), k2=through_channels(j, P["k2"], 0.0, 20.0))
+        return dict(n2=through_channels(j, P["r2"], *channel_range("r2_r")),
+                    k2=through_channels(j, P["k2"], *channel_range("k2_r")))
 
     order = sorted(leads)
     lead_r1 = gather(ops, [index(leads[g]) for g in order])
