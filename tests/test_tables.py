@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.fit.cycles_closures import evaluate_closures
-from layered_brdf_addon.model import ops_numpy, preset, program
+from layered_brdf_addon.model import preset, program
 from layered_brdf_addon.model.ops_numpy import vec
 from layered_brdf_addon.model.policy import plan_effects, render_plan, tables_fallback
 from layered_brdf_addon.model.presets import ARTIST_PRESETS
@@ -18,7 +18,7 @@ from layered_brdf_addon.model.shading.tables import NotTabulable
 from layered_brdf_addon.model.table_bake import (MAX_TABLE_BYTES, bake, table_digest, table_layout,
                                                  tabulated_result)
 from layered_brdf_addon.model.sphere import shading_point
-from layered_brdf_addon.model.table_check import PROBE_POINTS, PROBE_SEED, check_tables
+from layered_brdf_addon.model.table_check import PROBE_POINTS, PROBE_SEED, base_share, check_tables
 
 # Tables vs computed closures at random points, lights within three lobe widths of the mirror
 # direction (where the sharp lobes' light is): the L1 difference of the light leaving, and the
@@ -61,16 +61,10 @@ def light_computed_and_tabulated(p, rng):
     layout, texels = bake(p, plan)
     n0, v, l, d = _points(p, rng)
     pt = shading_point(p, n0, np.zeros_like(n0), view=v)
-    inputs = program.program_inputs(program.clamped_inputs(pt, plan))
-    computed = program.shade(pt, inputs, vec(n0), vec(n0), d, vec(v), replace(plan, tables=False))
+    computed = program.layered_surface(pt, replace(plan, tables=False), thickness=d)
     tabulated = tabulated_result(p, plan, layout, texels, n0, v, d)
-    weight, passed = program.passed_to_base(pt, plan, inputs, vec(v), vec(n0), computed.extras.get("reflected"))
-    base = np.concatenate([np.broadcast_to(weight, d.shape)[..., None],
-                           np.broadcast_to(np.asarray(passed, dtype=float), d.shape + (3,))], axis=-1)
-    read = np.concatenate([np.broadcast_to(tabulated.extras["base_weight"], d.shape)[..., None],
-                           np.broadcast_to(np.asarray(tabulated.extras["transmittance"], dtype=float),
-                                           d.shape + (3,))], axis=-1)
-    return evaluate_closures(computed, n0, v, l), evaluate_closures(tabulated, n0, v, l), base, read
+    return (evaluate_closures(computed, n0, v, l), evaluate_closures(tabulated, n0, v, l),
+            base_share(computed, d.shape), base_share(tabulated, d.shape))
 
 
 @pytest.mark.parametrize("name", list(MODES))
@@ -148,8 +142,7 @@ def test_tilted_tables_give_the_closures_the_program_computes(name, rng):
     n0, v, l, d = _points(p, rng)
     axes, n1 = _lower_normals(p, rng, len(d))
     pt = shading_point(p, n0, np.zeros_like(n0), view=v)
-    inputs = program.program_inputs(program.clamped_inputs(pt, plan))
-    computed = program.shade(pt, inputs, vec(n0), vec(n1), d, vec(v), replace(plan, tables=False))
+    computed = program.layered_surface(pt, replace(plan, tables=False), thickness=d, lower=vec(n1), axis=vec(axes))
     tabulated = tabulated_result(p, plan, layout, texels, n0, v, d, axes)
     a, b = evaluate_closures(computed, n0, v, l), evaluate_closures(tabulated, n0, v, l)
     l1 = np.abs(a - b).sum() / np.abs(a).sum()

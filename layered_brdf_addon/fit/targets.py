@@ -324,14 +324,12 @@ def shade_film(points: dict, values: dict, plan: EffectPlan, noise_at=NOISE_MEDI
     median; a column of levels makes a stack of its own, one row per level, for one set).
     With ``transmittance``, also what the film passes to a clear base per channel (same shape)."""
     pt = ShadingPoint(socket_values(values, ShadingPoint.SOCKETS), points["n0"], points["v"], points["p_object"])
-    P = program.clamped_inputs(pt)
+    d = None
     if plan.thickness == "noise":
         u = np.broadcast_to(noise_at, np.broadcast_shapes(np.shape(noise_at), (len(points["n0"]),)))
         d = values["d_min"] + (values["d_max"] - values["d_min"]) * u
-    else:
-        d = program.layer_thickness(pt, P, pt.object_position(), plan)
     try:
-        n1 = program.lower_normal(pt, P, pt.shading_normal(), pt.object_position(), d, plan)
+        _, _, _, _, _, d, _, n1 = program.surface_geometry(pt, plan, thickness=d)
     except NoiseUnavailable:
         raise ValueError("normal_mode 'correlated' with the noise pattern needs the render's lower normal") from None
     n0, v = points["n0"], points["v"]

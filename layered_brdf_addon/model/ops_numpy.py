@@ -216,7 +216,7 @@ class ShadingPoint:
 
     SOCKETS = "osl"  # the inputs are socket values as the OSL shader's (params.socket_units)
 
-    def __init__(self, inputs, normal, incoming, p_object, matrix=None, normal_input=(0.0, 0.0, 0.0),
+    def __init__(self, inputs, normal, incoming, p_object, matrix=None, normal_input=None,
                  height_gradient=None, tables=None):
         self.inputs = dict(inputs)
         self.tables = tables
@@ -243,8 +243,9 @@ class ShadingPoint:
         return contextlib.nullcontext()
 
     def input(self, name):
-        if name == "Normal":
-            return vec(np.broadcast_to(np.asarray(self.normal_input, dtype=float), np.shape(self.normal)))
+        if name == "Normal":  # unconnected (None): the shading normal, where the shaders' zero vector falls back
+            given = self.normal if self.normal_input is None else self.normal_input
+            return vec(np.broadcast_to(np.asarray(given, dtype=float), np.shape(self.normal)))
         if name == "Thickness" and name not in self.inputs:
             return np.asarray(-1.0)  # not linked
         return np.asarray(self.inputs[name], dtype=float)

@@ -76,6 +76,7 @@ __all__ = [
     "tilt_axis", "tilt_axis_about", "tilted_normal",
     "FLOAT_LIMIT", "clamped_inputs", "direction_input", "program_inputs", "CLEAR_K", "base_weight",
     "base_transmittance", "passed_at", "passed_to_base", "TableLayout", "tabulated_shade", "shade", "layered_surface",
+    "surface_geometry",
 ]
 
 
@@ -125,14 +126,14 @@ def shade(ops, P, n0, n1, d, v, plan: EffectPlan, wavelengths=WAVELENGTHS_NM) ->
     return res
 
 
-def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None) -> ShadingResult:
-    """The whole shader at one shading point, from the material's inputs; a plan with ``tables``
-    reads the closures from the material's baked tables, of ``layout`` (:mod:`.shading.tables`).
-
-    ``extras`` carries the shader's other outputs: ``thickness`` (nm), ``lower_normal``,
-    ``upper_normal`` (world space), ``base_weight`` (the factor of the Base Shader input) and
-    ``transmittance`` (what reaches the base per channel: the colour of a clear base's Transparent BSDF).
-    """
+def surface_geometry(ops, plan: EffectPlan, *, thickness=None, lower=None, axis=None):
+    """The shader's first stages at one shading point: ``(P, n0, v, p_obj, pattern, d, axis, n1)``, the inputs
+    kept within their ranges, the upper normal, the view, the object-space position, the thickness pattern (None
+    where there is none or the thickness is given), the thickness (nm), the tilt axis (None where the boundary
+    is not tilted) and the lower normal.  A caller that brings its own thickness, lower normal or tilt axis
+    (numpy: a render's AOVs, probe points, a fit's thickness levels) passes them (``lower``: the lower normal)
+    and they are taken as given;
+    the shaders compute all three."""
     with ops.stage("Inputs, each kept within its range; the upper normal n0"):
         P = clamped_inputs(ops, plan)
         # A zero-length or NaN Normal input (unconnected, or a broken texture) falls back to
@@ -140,12 +141,32 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None) ->
         n0 = ops.normalize(direction_input(ops, ops.input("Normal")), ops.shading_normal())
         v = ops.incoming()
         p_obj = ops.object_position()
+    pattern = None
     with ops.stage("Layer thickness d (nm): noise, height or your Thickness input"):
-        pattern = pattern_thickness(ops, P, p_obj, plan)
-        d = layer_thickness(ops, P, p_obj, plan, pattern)
+        if thickness is None:
+            pattern = pattern_thickness(ops, P, p_obj, plan)
+            d = layer_thickness(ops, P, p_obj, plan, pattern)
+        else:
+            d = thickness
     with ops.stage("Lower boundary normal n1: parallel, tilted or following d"):
-        axis = tilt_axis(ops, P, n0) if plan.normals == "tilted" else None
-        n1 = lower_normal(ops, P, n0, p_obj, d, plan, pattern, axis)
+        if axis is None and plan.normals == "tilted":
+            axis = tilt_axis(ops, P, n0)
+        n1 = lower_normal(ops, P, n0, p_obj, d, plan, pattern, axis) if lower is None else lower
+    return P, n0, v, p_obj, pattern, d, axis, n1
+
+
+def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None, *, thickness=None, lower=None,
+                    axis=None) -> ShadingResult:
+    """The whole shader at one shading point, from the material's inputs; a plan with ``tables``
+    reads the closures from the material's baked tables, of ``layout`` (:mod:`.shading.tables`).
+    ``thickness``, ``lower`` (the lower normal), ``axis``: what a caller brings of its own
+    (:func:`surface_geometry`).
+
+    ``extras`` carries the shader's other outputs: ``thickness`` (nm), ``lower_normal``,
+    ``upper_normal`` (world space), ``base_weight`` (the factor of the Base Shader input) and
+    ``transmittance`` (what reaches the base per channel: the colour of a clear base's Transparent BSDF).
+    """
+    P, n0, v, p_obj, pattern, d, axis, n1 = surface_geometry(ops, plan, thickness=thickness, lower=lower, axis=axis)
     if plan.tables:
         with ops.stage("Lobes and interference from the material's baked tables: the view's angle, d "
                        "(and the view's azimuth from the lower normal)"):

@@ -119,8 +119,9 @@ def thickness_field(params: LayeredParams, matrix=None):
 
     def field_(p):
         p = np.asarray(p, dtype=float)
-        pt = shading_point(params, np.zeros_like(p), p, matrix=matrix)
-        d = program.layer_thickness(pt, program.clamped_inputs(pt), pt.object_position(), plan)
+        up = np.broadcast_to(np.array([0.0, 0.0, 1.0]), p.shape)  # any normal: the thickness does not read it
+        pt = shading_point(params, up, p, matrix=matrix)
+        d = program.surface_geometry(pt, plan, lower=up)[5]  # the thickness (the lower normal not needed)
         return np.broadcast_to(np.asarray(d, dtype=float), p.shape[:-1]).copy()
 
     return field_
@@ -134,14 +135,13 @@ def lower_normal(params: LayeredParams, n0: np.ndarray, p_object: np.ndarray, d=
     """
     plan = plan_effects(params)
     pt = shading_point(params, n0, p_object, matrix=matrix)
-    P = program.clamped_inputs(pt)
     if d is None:
         try:
-            d = program.layer_thickness(pt, P, pt.object_position(), plan)
+            d = program.surface_geometry(pt, plan, lower=pt.shading_normal())[5]
         except NoiseUnavailable:
             d = np.zeros(np.shape(n0)[:-1])
     try:
-        n1 = program.lower_normal(pt, P, pt.shading_normal(), pt.object_position(), d, plan)
+        n1 = program.surface_geometry(pt, plan, thickness=d)[7]
     except NoiseUnavailable:
         raise ValueError("normal_mode 'correlated' with the noise pattern needs the render's lower normal "
                          "(pass lower_normals read from the render's AOV)") from None

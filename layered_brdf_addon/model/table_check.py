@@ -19,8 +19,7 @@ from .closure_light import evaluate_closures
 from .ops_numpy import ShadingPoint, vec
 from .params import LayeredParams
 from .plan import EffectPlan
-from .program import passed_to_base, shade
-from .shading.inputs import clamped_inputs, program_inputs
+from .program import layered_surface
 from .shading.surface_prelude import tilted_normal
 from .table_bake import bake, held_values, table_digest, tabulated_result
 
@@ -102,28 +101,29 @@ def check_tables(params: LayeredParams, plan: EffectPlan, layout, texels, points
     if plan.normals != "tilted":
         n1 = n0
     pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0))
-    inputs = program_inputs(clamped_inputs(pt, plan))
-    computed = shade(ops_numpy, inputs, vec(n0), vec(n1), d, vec(v), replace(plan, tables=False))
+    computed = layered_surface(pt, replace(plan, tables=False), thickness=d, lower=vec(n1), axis=vec(axes))
     tabulated = tabulated_result(params, plan, layout, texels, n0, v, d, axes if layout.sliced else None)
     a = evaluate_closures(computed, n0, v, light, plan.lobe)
     b = evaluate_closures(tabulated, n0, v, light, plan.lobe)
     total = float(np.abs(a).sum())
     l1 = float(np.abs(a - b).sum()) / total if total > 0.0 else 0.0
     off = np.abs(a - b).max(axis=-1) > RELATIVE * np.maximum(a.max(axis=-1), 1e-3 * max(float(a.max()), 1e-30))
-    base = _base_difference(pt, plan, inputs, v, n0, computed, tabulated, d.shape)
+    base = _base_difference(computed, tabulated, d.shape)
     return TableCheck(l1=l1, failing=float(np.mean(off)), base=base,
                       limits=TILTED_LIMITS if layout.sliced else PARALLEL_LIMITS)
 
 
-def _base_difference(pt, plan, inputs, v, n0, computed, tabulated, shape) -> float:
-    """The largest difference between the Base Shader factor and transmittance computed and read from tables."""
-    weight, passed = passed_to_base(pt, plan, inputs, vec(v), vec(n0), computed.extras.get("reflected"))
-    want = np.concatenate([np.broadcast_to(weight, shape)[..., None],
-                           np.broadcast_to(np.asarray(passed, dtype=float), shape + (3,))], axis=-1)
-    read = np.concatenate([np.broadcast_to(tabulated.extras["base_weight"], shape)[..., None],
-                           np.broadcast_to(np.asarray(tabulated.extras["transmittance"], dtype=float),
-                                           shape + (3,))], axis=-1)
-    return float(np.nanmax(np.abs(want - read))) if want.size else 0.0
+def base_share(result, shape) -> np.ndarray:
+    """What a shading result passes to the base: the Base Shader factor and the transmittance, (..., 4)."""
+    return np.concatenate([np.broadcast_to(result.extras["base_weight"], shape)[..., None],
+                           np.broadcast_to(np.asarray(result.extras["transmittance"], dtype=float), shape + (3,))],
+                          axis=-1)
+
+
+def _base_difference(computed, tabulated, shape) -> float:
+    """The largest difference between what passes to the base, computed and read from tables."""
+    diff = np.abs(base_share(computed, shape) - base_share(tabulated, shape))
+    return float(np.nanmax(diff)) if diff.size else 0.0
 
 
 _KEPT = 8
