@@ -211,7 +211,8 @@ class ShadingPoint:
 
     ``inputs``: parameter values by socket name (scalars or per-point arrays); ``normal``,
     ``incoming`` (towards the camera) and ``p_object``: (..., 3) arrays; ``matrix``: the
-    object's 3x3 linear part (object to world), identity by default.
+    object's 3x3 linear part (object to world), identity by default; ``normal_input``: the Normal
+    socket's vector (None: unconnected, the shading normal).
     """
 
     SOCKETS = "osl"  # the inputs are socket values as the OSL shader's (params.socket_units)
