@@ -41,10 +41,10 @@ def main(argv=None) -> int:
     import eevee_lookdev
 
     from layered_brdf_addon.cli.gallery import compose_sheet, layout_for
-    from layered_brdf_addon.cli.codecs import save_png
+    from layered_brdf_addon.io.codecs import save_png
     from layered_brdf_addon.cli.lookdev import check_sheet_output
-    from layered_brdf_addon.cli.sidecar import write_json
-    from layered_brdf_addon.cli.staging import StagedOutputs
+    from layered_brdf_addon.io.sidecar import write_json
+    from layered_brdf_addon.io.staging import StagedOutputs
     from layered_brdf_addon.model.presets import preset_label
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -112,7 +112,7 @@ def save_sheet(path: Path, linear: np.ndarray) -> None:
     """``linear`` RGB as an sRGB PNG (the Standard view transform the balls were rendered for)."""
     import colour
 
-    from layered_brdf_addon.cli.codecs import save_png
+    from layered_brdf_addon.io.codecs import save_png
 
     encoded = colour.cctf_encoding(np.clip(linear, 0.0, 1.0), function="sRGB")
     save_png(path, np.round(encoded * 255.0).astype(np.uint8))

@@ -67,11 +67,11 @@ def render(output: Path, size: int, samples: int, names, hdri_name, progress: bo
     from layered_brdf_addon.blender import lookdev
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.blender.scene import reset_blender, view_settings_record
-    from layered_brdf_addon.cli.codecs import save_png
+    from layered_brdf_addon.io.codecs import save_png
     from layered_brdf_addon.cli.gallery import layout_for
     from layered_brdf_addon.cli.lookdev import encode_sheet, render_tiles
-    from layered_brdf_addon.cli.sidecar import write_json
-    from layered_brdf_addon.cli.staging import StagedOutputs
+    from layered_brdf_addon.io.sidecar import write_json
+    from layered_brdf_addon.io.staging import StagedOutputs
     from layered_brdf_addon.model.presets import preset, preset_label
 
     t0 = time.perf_counter()

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from layered_brdf_addon.cli.codecs import read_exr_layers
+from layered_brdf_addon.io.codecs import read_exr_layers
 
 CLI_TIMEOUT = 240
 

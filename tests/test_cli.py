@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.cli import commands as cli
-from layered_brdf_addon.cli.codecs import srgb_encode, to_srgb8
+from layered_brdf_addon.io.codecs import srgb_encode, to_srgb8
 from layered_brdf_addon.cli.commands import format_table
 from layered_brdf_addon.cli.render_job import PNG_ENCODING
 from layered_brdf_addon.cli.requests import request_from_options
-from layered_brdf_addon.cli.sidecar import read_sidecar
-from layered_brdf_addon.cli.staging import OutputPaths, StagedOutputs, stale_temps, temp_path
+from layered_brdf_addon.io.sidecar import read_sidecar
+from layered_brdf_addon.io.staging import OutputPaths, StagedOutputs, stale_temps, temp_path
 from layered_brdf_addon.model.params import PARAM_SPECS, ParameterError
 from layered_brdf_addon.model.presets import preset
 
@@ -165,7 +165,7 @@ def test_render_writes_png_exr_sidecar_that_predict_the_pixels(tmp_path):
     from layered_brdf_reference.closures import closure_shading
     from layered_brdf_reference.compare import agreement, lit_mask
     from layered_brdf_addon.model.sphere import render_spheres
-    from layered_brdf_addon.cli.sidecar import scene_from_sidecar
+    from layered_brdf_addon.io.sidecar import scene_from_sidecar
     from PIL import Image
 
     res = run_cli("render", "--preset", "fig6_medium", "--resolution", 64, "--sun", 0.6, -1, 0.4,

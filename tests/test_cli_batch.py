@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.cli.job_files import load_job_file
-from layered_brdf_addon.cli.sidecar import read_sidecar
+from layered_brdf_addon.io.sidecar import read_sidecar
 from layered_brdf_addon.model.params import ParameterError
 
 from process_helpers import beauty, files_under, run_cli

@@ -23,7 +23,7 @@ from layered_brdf_addon.cli.job_files import load_job_file
 from layered_brdf_addon.cli.option_values import unit_notes
 from layered_brdf_addon.cli.input_files import FileValueError
 from layered_brdf_addon.cli.requests import request_from_options
-from layered_brdf_addon.cli.staging import WriteError, writing
+from layered_brdf_addon.io.staging import WriteError, writing
 from layered_brdf_addon.model.params import ParameterError
 from layered_brdf_addon.model.presets import preset
 

@@ -9,7 +9,7 @@ import pytest
 
 from layered_brdf_addon.cli.gallery import label_lines, layout_for
 from layered_brdf_addon.cli.lookdev import DEFAULT_PRESETS, settings_from_options as lookdev_settings
-from layered_brdf_addon.cli.sidecar import read_sidecar
+from layered_brdf_addon.io.sidecar import read_sidecar
 from layered_brdf_addon.model.params import LayeredParams, ParameterError
 from layered_brdf_addon.model.presets import PAPER_PRESETS, PRESETS, preset, preset_label
 

@@ -19,7 +19,7 @@ from layered_brdf_addon.cli.fit_options import DEFAULT_STARTS, start_of
 from layered_brdf_addon.cli.fit_outputs import PRESET_FORMAT
 from layered_brdf_addon.cli.fit_targets import column_role, reflectance_rows
 from layered_brdf_addon.cli.requests import request_from_options
-from layered_brdf_addon.cli.sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dict, write_json
+from layered_brdf_addon.io.sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dict, write_json
 from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.cycles_closures import closure_shading
 from layered_brdf_addon.model.params import LayeredParams
@@ -392,7 +392,7 @@ def _wait_for_progress(proc, timeout: float) -> None:
 # renders by Blender
 @pytest.mark.slow
 def test_a_blender_render_is_fitted_and_the_fit_renders_to_it(tmp_path):
-    from layered_brdf_addon.cli.codecs import exr_beauty
+    from layered_brdf_addon.io.codecs import exr_beauty
 
     truth = HELD_OUT["film_on_dark_diffuse"][0]
     (tmp_path / "truth.json").write_text(truth.to_json())

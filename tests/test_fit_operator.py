@@ -23,7 +23,7 @@ from layered_brdf_addon.blender.sync import apply_to_object
 from layered_brdf_addon.blender.material import input_value, shader_node
 from layered_brdf_addon.blender.scene import (SceneSpec, build_scene, camera_for, render_to_exr, reset_blender,
                                               row_of_spheres)
-from layered_brdf_addon.cli.sidecar import SIDECAR_FORMAT, camera_to_dict, sun_to_dict, write_json
+from layered_brdf_addon.io.sidecar import SIDECAR_FORMAT, camera_to_dict, sun_to_dict, write_json
 from layered_brdf_addon.blender.sidecar_views import sidecar_views
 from layered_brdf_addon.fit.solve import FitCancelled
 from layered_brdf_addon.fit.targets import TargetError

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from layered_brdf_addon.cli.sidecar import write_json
+from layered_brdf_addon.io.sidecar import write_json
 
 from test_fit_cli import _render_set, run_fit
 

@@ -16,7 +16,7 @@ import pytest
 from layered_brdf_addon.cli import job_files
 from layered_brdf_addon.cli.gallery import settings_from_options
 from layered_brdf_addon.cli.job_files import load_job_file
-from layered_brdf_addon.cli.staging import OutputPaths, StagedOutputs
+from layered_brdf_addon.io.staging import OutputPaths, StagedOutputs
 from layered_brdf_addon.model.params import ParameterError
 
 import process_helpers

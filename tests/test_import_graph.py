@@ -129,3 +129,24 @@ def test_every_function_level_import_of_the_add_on_says_why():
             if not any("#" in line for line in statement):
                 silent.append(f"{path.relative_to(ROOT)}:{node.lineno}")
     assert not sorted(set(silent)), "function-level imports without a reason: " + ", ".join(sorted(set(silent)))
+
+
+# Which layer may import which: the bpy-free core (model, backends, fit, io) never imports the command line
+# or the Blender layer, and the Blender layer never imports the command line (both share io).
+LAYERS = {
+    "layered_brdf_addon.model": ("layered_brdf_addon.cli", "layered_brdf_addon.blender", "layered_brdf_addon.fit",
+                                 "layered_brdf_addon.io"),
+    "layered_brdf_addon.io": ("layered_brdf_addon.cli", "layered_brdf_addon.blender", "layered_brdf_addon.fit"),
+    "layered_brdf_addon.fit": ("layered_brdf_addon.cli", "layered_brdf_addon.blender"),
+    "layered_brdf_addon.blender": ("layered_brdf_addon.cli",),
+}
+
+
+def test_imports_run_down_the_layers():
+    wrong = []
+    for module in MODULES:
+        for layer, forbidden in LAYERS.items():
+            if module == layer or module.startswith(layer + "."):
+                wrong += [f"{module} -> {target}" for target, _, _ in _imports(module)
+                          if any(target == f or target.startswith(f + ".") for f in forbidden)]
+    assert not wrong, "imports against the layers: " + "; ".join(sorted(wrong))

@@ -212,13 +212,20 @@ def test_tables_hold_the_program_wherever_a_material_uses_them(name):
         assert bool(why) == asked.tables
 
 
-@pytest.mark.parametrize("name", ["r0 5.0 over r1 1.0", "r0 1.7 over r1 1.0", "oil 9-10 um rgb", "oil 3-3.5 um rgb"])
+@pytest.mark.parametrize("name", ["r0 5.0 over r1 1.0", "r0 1.7 over r1 1.0", "r0 2.0 over r1 1.45", "oil 9-10 um rgb",
+                                  "oil 3-3.5 um rgb", "oil 3-3.5 um spectral8", "soap 0-10 um"])
 def test_tables_that_would_not_hold_are_not_used(name):
     p = SWEEP[name]
     assert plan_effects(p).tables and not render_plan(p).tables and "computed per point" in tables_fallback(p)
 
 
-@pytest.mark.parametrize("name", list(MODES))
-def test_every_preset_and_mode_keeps_its_tables(name):
-    p = MODES[name]
+@pytest.mark.parametrize("name", list(MODES) + [f"{name}, Roughness {r}" for name in ("oil_slick", "soap_bubble",
+                                                                                   "anodised_titanium", "fig4_parallel")
+                                                 for r in (0.1, 0.3, 0.6)])
+def test_every_preset_mode_and_roughness_keeps_its_tables(name):
+    if name in MODES:
+        p = MODES[name]
+    else:
+        look, r = name.split(", Roughness ")
+        p = preset(look).replace(e0=(float(r) ** -4 - 1.0) / 2.0)
     assert render_plan(p).tables == plan_effects(p).tables, tables_fallback(p)

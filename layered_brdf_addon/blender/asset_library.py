@@ -27,7 +27,7 @@ From a shell (or ``make assets``)::
         [--preview-size PX] [--samples N] [--hdri NAME]
 
 There, as for ``render`` and ``lookdev``, SIGINT and SIGTERM end the build with exit code
-130 and leave the library folder as it was (:class:`~layered_brdf_addon.cli.staging.InterruptGuard`),
+130 and leave the library folder as it was (:class:`~layered_brdf_addon.io.staging.InterruptGuard`),
 and Blender's temporary files live in the process's own temp folder (:mod:`.tempdirs`).
 """
 from __future__ import annotations
@@ -35,7 +35,7 @@ from __future__ import annotations
 import contextlib
 import sys
 
-from ..cli.staging import InterruptGuard
+from ..io.staging import InterruptGuard
 from . import tempdirs
 
 INTERRUPTED = "interrupted; the library folder was left as it was before this build"

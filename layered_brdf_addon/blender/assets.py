@@ -191,7 +191,7 @@ def render_previews(materials, size: int | None = None, samples: int | None = No
 
     The renders go to a folder of the add-on's own (``layered_brdf_preview_PID_*``, swept when
     its process died).  With an interrupt ``guard``
-    (:class:`~layered_brdf_addon.cli.staging.InterruptGuard`, the command line's), a signal
+    (:class:`~layered_brdf_addon.io.staging.InterruptGuard`, the command line's), a signal
     stops the renders at once and the folder is removed."""
     size, samples = check_preview_options(PREVIEW_SIZE if size is None else size,
                                           PREVIEW_SAMPLES if samples is None else samples)

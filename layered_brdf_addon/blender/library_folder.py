@@ -18,7 +18,7 @@ import secrets
 import shutil
 from pathlib import Path
 
-from ..cli.staging import InterruptGuard
+from ..io.staging import InterruptGuard
 from ..model.params import ParameterError
 from . import tempdirs
 from .catalogs import CATALOG_FILE, all_catalogs, catalog_text

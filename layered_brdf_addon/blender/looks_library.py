@@ -15,7 +15,7 @@ from pathlib import Path
 
 import bpy
 
-from ..cli.staging import InterruptGuard
+from ..io.staging import InterruptGuard
 from ..model.params import ParameterError
 from ..model.policy import render_plan
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS

@@ -247,7 +247,7 @@ def render_to_file(path, scene=None, guard=None) -> float:
 
     The add-on's one render call: the tests, ``render``, ``gallery`` and the asset previews
     all render through it.  The file is written under a temporary name and renamed when
-    complete.  With an :class:`~layered_brdf_addon.cli.staging.InterruptGuard`, a signal
+    complete.  With an :class:`~layered_brdf_addon.io.staging.InterruptGuard`, a signal
     during the render stops it at once and the write holds the guard's I/O lock, so an
     interrupt waits for a complete file.  Returns the render seconds.
     """

@@ -17,9 +17,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..cli.codecs import exr_beauty
-from ..cli.sidecar import read_sidecar, scene_from_sidecar
-from ..cli.staging import OutputPaths, output_stem
+from ..io.codecs import exr_beauty
+from ..io.sidecar import read_sidecar, scene_from_sidecar
+from ..io.staging import OutputPaths, output_stem
 from ..fit.targets import SphereView, TargetError
 
 

@@ -100,7 +100,7 @@ def private_tempdir(kind: str) -> Iterator[Path]:
 def owned_tempdir(kind: str, guard=None) -> Iterator[Path]:
     """A new owned folder for the block (stale folders of dead processes swept first), removed after it.
 
-    With an interrupt ``guard`` (:class:`~layered_brdf_addon.cli.staging.InterruptGuard`) the
+    With an interrupt ``guard`` (:class:`~layered_brdf_addon.io.staging.InterruptGuard`) the
     folder is also removed by the guard's clean-up when a signal ends the process inside the
     block; a process killed outright leaves it to the next sweep.
     """

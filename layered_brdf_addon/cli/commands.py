@@ -41,7 +41,7 @@ from .options import (EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK, Argu
 from .render_job import execute_render
 from .requests import RUN_OPTIONS, request_from_options
 from .runner import check_report_target, exit_code, follow_parent, run_batch, write_report
-from .staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
+from ..io.staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 
 PROG = "layered-brdf"
 COMMANDS = ("lookdev", "gallery", "render", "batch", "fit")

@@ -41,7 +41,7 @@ from .fit_outputs import (check_output, default_output, fit_record, output_docum
 from .fit_targets import load_principled_target, load_reflectance_target, load_render_target, source_of
 from .option_values import int_option
 from .options import EXIT_OK
-from .staging import InterruptGuard
+from ..io.staging import InterruptGuard
 
 STEPS_PER_START = 40  # the optimiser's steps from each start
 

@@ -20,12 +20,12 @@ from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects, render_plan
 from ..model.presets import PAPER_PRESETS, preset
 from ..model.sphere import OrthoCamera, Sun
-from .codecs import to_srgb8
+from ..io.codecs import to_srgb8
 from .option_values import check_preset_names, float_option, int_option, parse_sun
 from .render_job import render_outputs, sidecar
 from .requests import check_output
-from .sidecar import camera_to_dict, sun_to_dict
-from .staging import InterruptGuard, OutputPaths, output_stem
+from ..io.sidecar import camera_to_dict, sun_to_dict
+from ..io.staging import InterruptGuard, OutputPaths, output_stem
 
 SPACING = 2.2  # centre distance of neighbouring spheres (unit radius): a 10% margin per tile
 DEFAULT_SIZE = 128

@@ -10,7 +10,7 @@ from ..model.params import ParameterError
 from .input_files import read_table_file, same_file
 from .option_values import check_name, short_name, shown
 from .requests import REFERENCE_ONLY, RenderRequest, request_from_options
-from .staging import TargetError, check_targets
+from ..io.staging import TargetError, check_targets
 
 
 @dataclass

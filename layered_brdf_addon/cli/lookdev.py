@@ -26,12 +26,12 @@ from ..blender import tempdirs
 from ..model.params import ParameterError
 from ..model.policy import render_plan
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
-from .codecs import muted_stderr, save_png
+from ..io.codecs import muted_stderr, save_png
 from .gallery import GalleryLayout, compose_sheet, layout_for
 from .option_values import check_preset_names, int_option
 from .render_job import view_png_encoding
-from .sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, write_json
-from .staging import (InterruptGuard, StagedOutputs, TargetError, check_targets, output_stem, reading_back,
+from ..io.sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, write_json
+from ..io.staging import (InterruptGuard, StagedOutputs, TargetError, check_targets, output_stem, reading_back,
                       writing)
 
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"

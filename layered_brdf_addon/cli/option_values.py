@@ -4,28 +4,27 @@ An option's value comes from the command line or from a file (a params file, a j
 entry); every one is first checked to be a plain value (:func:`check_plain`: a short text,
 a number of few digits, a short flat list), then by its own validator (:func:`int_option`,
 :func:`float_option`, :func:`parse_resolution`, :func:`parse_sun`, names and paths), which
-raises :class:`ParameterError` naming the option.  :func:`shown` cuts a value short for a
-message.  Nothing here imports bpy.
+raises :class:`ParameterError` naming the option (its value cut short by :func:`..io.messages.shown`).
+Nothing here imports bpy.
 """
 from __future__ import annotations
 
 import math
 import os
-import reprlib
 from pathlib import Path
 from typing import Any, Sequence
 
 from ..model import policy
 from ..model.params import PARAM_SPECS, ParameterError, as_number
+from ..io.messages import MAX_INT_DIGITS, shown  # noqa: F401 (the command line's names for them)
+from ..io.sidecar import MAX_RESOLUTION
 from ..model.presets import PRESETS
 
 PARAM_NAMES = tuple(s.name for s in PARAM_SPECS)
-MAX_RESOLUTION = 16384
 
 # Limits on what each value, typed or read from a file, may be.
 MAX_TEXT = 4096  # characters of a string value (a path, a name)
 MAX_ITEMS = 16  # items of a list value (sun: 3, resolution: 2)
-MAX_INT_DIGITS = 18  # digits of an integer value
 MAX_NAME = 200  # characters of a name
 MAX_STEM_BYTES = 200  # bytes (UTF-8) of an output stem's file name
 
@@ -49,39 +48,7 @@ OPTION_ALLOWED = {
 
 
 # ---------------------------------------------------------------------------
-# values in messages, and values too big for any option
-class _Shown:
-    """A value's short form for an error message: ``repr`` gives it as is (unquoted)."""
-
-    def __init__(self, text: str):
-        self.text = text
-
-    def __repr__(self) -> str:
-        return self.text
-
-
-class _ShortRepr(reprlib.Repr):
-    """``reprlib`` cut to a message line: 2 levels, 8 items, 60 characters.  An integer of
-    more digits than any option takes is named, not printed: a screen of digits says
-    less, and Python refuses to print one of over 4300."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.maxlevel, self.maxlist, self.maxtuple, self.maxdict, self.maxstring, self.maxother = 2, 8, 8, 8, 60, 60
-
-    def repr_int(self, x: int, level: int) -> str:
-        return repr(x) if abs(x) < 10 ** MAX_INT_DIGITS else f"<an integer of more than {MAX_INT_DIGITS} digits>"
-
-
-_SHORT_REPR = _ShortRepr()
-
-
-def shown(value: Any) -> Any:
-    """``value`` as an error message shows it: its repr cut short, since a file's value
-    may be a megabyte of text or lists nested thousands of levels deep."""
-    return _Shown(_SHORT_REPR.repr(value))
-
-
+# values too big for any option
 def short_name(key: Any) -> str:
     """A key of a file as a parameter name in a message (long or odd keys cut)."""
     text = key if isinstance(key, str) else repr(shown(key))

@@ -19,7 +19,7 @@ from ..model.sphere import OrthoCamera, Sun
 from .input_files import check_blend_file, file_label, from_file, load_params_file, merged_values, same_file
 from .option_values import (MAX_STEM_BYTES, MAX_TEXT, OPTION_ALLOWED, PARAM_NAMES, check_name, check_plain,
                             float_option, int_option, option_flag, parse_resolution, parse_sun, short_name, shown)
-from .staging import OutputPaths, TargetError, check_targets, output_stem
+from ..io.staging import OutputPaths, TargetError, check_targets, output_stem
 
 RUN_OPTIONS = ("name", "preset", "params", "blend", "object", "backend", "samples", "resolution", "sun",
                "sun_strength", "seed", "threads", "output")

@@ -19,8 +19,8 @@ from typing import Any, Iterable, Sequence
 
 from ..model.params import ParameterError
 from .job_files import Job
-from .sidecar import to_jsonable
-from .staging import OutputPaths, remove_stale_temps
+from ..io.sidecar import to_jsonable
+from ..io.staging import OutputPaths, remove_stale_temps
 
 
 @dataclass

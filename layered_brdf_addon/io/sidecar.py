@@ -17,11 +17,12 @@ import numpy as np
 from ..model.errors import ParameterError
 from ..model.params import LayeredParams
 from ..model.sphere import OrthoCamera, Sun
-from .option_values import MAX_RESOLUTION, shown
+from .messages import shown
 from .staging import OutputPaths, output_stem
 
 SIDECAR_FORMAT = "layered-brdf render"
 SIDECAR_VERSION = 1
+MAX_RESOLUTION = 16384  # pixels along an image's side, at most (a render's option, a sidecar's camera)
 
 
 def to_jsonable(value: Any) -> Any:
