@@ -340,3 +340,14 @@ def test_a_redraw_of_the_material_panel_reads_the_animation_once(monkeypatch):
                                                                                           scene=bpy.context.scene))
     assert len(walks) == 1
     assert any(line.startswith("Effects (") for line in labels(log))
+
+
+def test_the_panel_says_why_a_material_computes_where_it_asked_for_tables():
+    obj = plain_object()
+    tir = preset("fig4_parallel").replace(optics="physical", r0=5.0, layer_index="channels", r1_r=1.0, r1_g=1.0,
+                                          r1_b=1.0)
+    sync.apply_to_object(obj, tir, "nodes", preview=False)
+    said = [line for line in labels(draw_panels(obj)) if "computed per point" in line]
+    assert len(said) == 1 and said[0].startswith("Baked tables would be") and "base" in said[0]
+    sync.apply_to_object(obj, preset("fig4_parallel"), "nodes", preview=False)
+    assert not [line for line in labels(draw_panels(obj)) if "computed per point" in line]
