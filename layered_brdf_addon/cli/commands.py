@@ -22,7 +22,6 @@ from pathlib import Path
 from typing import Any, Collection, Iterable, Sequence
 
 from .. import __version__
-from ..model import policy
 from ..model.params import PARAM_SPECS, ParameterError
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 from .fit_command import cmd_fit
@@ -35,11 +34,12 @@ from .input_files import FileValueError
 from .job_files import load_job_file
 from .lookdev import DEFAULT_OUTPUT, DEFAULT_SAMPLES, DEFAULT_SIZE, SAMPLES_RANGE, SIZE_RANGE, render_lookdev
 from .lookdev import settings_from_options as lookdev_settings
+from .option_table import add_options, options_of
 from .option_values import PARAM_NAMES, float_option, int_option, unit_notes
 from .options import (EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK, ArgumentParser, add_param_options,
                       blender_output)
 from .render_job import execute_render
-from .requests import RUN_OPTIONS, request_from_options
+from .requests import request_from_options, run_options
 from .runner import check_report_target, exit_code, follow_parent, run_batch, write_report
 from ..io.staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 
@@ -47,16 +47,8 @@ PROG = "layered-brdf"
 COMMANDS = ("lookdev", "gallery", "render", "batch", "fit")
 
 
-def _add_scene_options(p: argparse.ArgumentParser, samples_help: str) -> None:
-    p.add_argument("--backend", choices=policy.BACKENDS, default=None,
-                   help="shader backend: the generated node group (default) or the OSL script")
-    p.add_argument("--samples", default=None, metavar="N", help=samples_help)
-    p.add_argument("--sun", nargs=3, default=None, metavar=("X", "Y", "Z"),
-                   help="direction from the scene towards the zero-angle sun (default 0.5 -1 0.6)")
-    p.add_argument("--sun-strength", dest="sun_strength", default=None, metavar="W_PER_M2",
-                   help="sun irradiance (default 3)")
-    p.add_argument("--seed", default=None, metavar="N", help="Cycles' sampling seed (default 0)")
-    p.add_argument("--threads", default=None, metavar="N", help="Cycles render threads (default 2)")
+def _add_scene_options(p: argparse.ArgumentParser, command: str) -> None:
+    add_options(p, command)  # the scene options of the table (.option_table), each with its range
     p.add_argument("--verbose", action="store_true", help="show Blender's own log")
 
 
@@ -101,7 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--presets", nargs="+", default=None, metavar="NAME",
                    help="other presets to show instead of the paper's (any of: "
                    + ", ".join(list(PAPER_PRESETS) + list(ARTIST_PRESETS)) + ")")
-    _add_scene_options(g, "samples per pixel (default 16; one is exact under the sun, more anti-alias)")
+    _add_scene_options(g, "gallery")
 
     r = sub.add_parser("render", help="one material on the reference sphere or on an object of a .blend",
                        description="Render one material; write STEM.png (8-bit sRGB: the reference sphere with the "
@@ -119,8 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
     scn.add_argument("--object", default=None, metavar="NAME", help="the object of --blend that gets the material")
     scn.add_argument("--resolution", default=None, metavar="N|WxH",
                      help="image size (reference sphere: default 128; .blend: default the file's)")
-    _add_scene_options(scn, "samples per pixel (reference sphere: default 1, exact under a zero-angle sun; "
-                       ".blend: default the file's)")
+    _add_scene_options(scn, "render")
     out = r.add_argument_group("output")
     out.add_argument("--output", default=None, metavar="PATH",
                      help="output stem: writes PATH.png, PATH.exr, PATH.json (default out/PRESET)")
@@ -184,7 +175,7 @@ def _options(ns: argparse.Namespace, names: Sequence[str]) -> dict[str, Any]:
 def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``render``: validate, then render one request in this process."""
     follow_parent()
-    req = request_from_options(_options(ns, RUN_OPTIONS + PARAM_NAMES))
+    req = request_from_options(_options(ns, run_options() + PARAM_NAMES))
     for note in unit_notes(dict(req.overrides)):
         print(f"{PROG}: note: {note}", file=sys.stderr)
     with blender_output(ns.verbose):
@@ -198,8 +189,8 @@ def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``gallery``: render the paper's configurations into one labelled contact sheet."""
-    s = gallery_settings(_options(ns, ("output", "size", "samples", "backend", "columns", "sun",
-                                            "sun_strength", "seed", "threads", "presets")))
+    s = gallery_settings(_options(ns, ("output", "size", "columns", "presets")
+                                  + tuple(spec.name for spec in options_of("gallery"))))
     with blender_output(ns.verbose):
         res = render_gallery(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv])
     headers, rows = summary_rows(res)

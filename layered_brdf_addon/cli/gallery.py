@@ -15,17 +15,18 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..blender import tempdirs
+from ..io.codecs import to_srgb8
+from ..io.sidecar import camera_to_dict, sun_to_dict
+from ..io.staging import InterruptGuard, OutputPaths, output_stem
 from ..model import policy
 from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects, render_plan
 from ..model.presets import PAPER_PRESETS, preset
 from ..model.sphere import OrthoCamera, Sun
-from ..io.codecs import to_srgb8
-from .option_values import check_preset_names, float_option, int_option, parse_sun
+from .option_table import read_options
+from .option_values import check_preset_names, int_option
 from .render_job import render_outputs, sidecar
 from .requests import check_output
-from ..io.sidecar import camera_to_dict, sun_to_dict
-from ..io.staging import InterruptGuard, OutputPaths, output_stem
 
 SPACING = 2.2  # centre distance of neighbouring spheres (unit radius): a 10% margin per tile
 DEFAULT_SIZE = 128
@@ -185,6 +186,7 @@ class GallerySettings:
     seed: int = 0
     threads: int = 2
     presets: tuple[str, ...] = tuple(PAPER_PRESETS)
+    scene_options: dict[str, Any] = field(default_factory=dict)  # every table option given, as read
 
     def sun_light(self) -> Sun:
         default = Sun()
@@ -207,20 +209,18 @@ def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     """Validate gallery options (``output``, ``size``, ``samples``, ``backend``, ...) without Blender."""
     o = {k: v for k, v in options.items() if v is not None}
     size = int_option("size", o.get("size", DEFAULT_SIZE), *SIZE_RANGE)
-    samples = int_option("samples", o.get("samples", DEFAULT_SAMPLES), 1, 1_000_000)
-    backend = o.get("backend", "nodes")
-    policy.check_backend(backend)
+    scene = read_options("gallery", o)
+    samples = scene.get("samples", DEFAULT_SAMPLES)
+    backend = scene.get("backend", "nodes")
     columns = int_option("columns", o["columns"], 1, 64) if "columns" in o else None
-    sun = parse_sun(o["sun"]) if "sun" in o else None
-    strength = float_option("sun_strength", o["sun_strength"], 0.0, 1e6) if "sun_strength" in o else None
-    seed = int_option("seed", o.get("seed", 0), 0, 2**31 - 1)
-    threads = int_option("threads", o.get("threads", 2), 1, 1024)
+    sun, strength = scene.get("sun"), scene.get("sun_strength")
+    seed, threads = scene.get("seed", 0), scene.get("threads", 2)
     names = check_preset_names(o.get("presets") or PAPER_PRESETS)
     for name in names:
         check_preset_lobe(name, backend)
     output = check_output(o.get("output", DEFAULT_OUTPUT))
     return GallerySettings(output=output, size=size, samples=samples, backend=backend, columns=columns, sun=sun,
-                           sun_strength=strength, seed=seed, threads=threads, presets=names)
+                           sun_strength=strength, seed=seed, threads=threads, presets=names, scene_options=scene)
 
 
 @dataclass

@@ -9,7 +9,7 @@ from typing import Any
 from ..model.params import ParameterError
 from .input_files import read_table_file, same_file
 from .option_values import check_name, short_name, shown
-from .requests import REFERENCE_ONLY, RenderRequest, request_from_options
+from .requests import RenderRequest, reference_only, request_from_options
 from ..io.staging import TargetError, check_targets
 
 
@@ -64,7 +64,7 @@ def load_job_file(path: str | os.PathLike, output_dir: str | os.PathLike | None 
             raise ParameterError(f"job[{k}]", shown(entry), "a table of render options")
         inherited = dict(defaults)
         if "blend" in entry or "blend" in defaults:
-            for key in REFERENCE_ONLY:  # a .blend uses its own lights
+            for key in reference_only():  # a .blend uses its own lights
                 inherited.pop(key, None)
         options = {**inherited, **entry}
         explicit = options.get("name")

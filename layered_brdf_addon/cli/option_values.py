@@ -14,7 +14,6 @@ import os
 from pathlib import Path
 from typing import Any, Sequence
 
-from ..model import policy
 from ..model.params import PARAM_SPECS, ParameterError, as_number
 from ..io.messages import MAX_INT_DIGITS, shown  # noqa: F401 (the command line's names for them)
 from ..io.sidecar import MAX_RESOLUTION
@@ -28,21 +27,17 @@ MAX_ITEMS = 16  # items of a list value (sun: 3, resolution: 2)
 MAX_NAME = 200  # characters of a name
 MAX_STEM_BYTES = 200  # bytes (UTF-8) of an output stem's file name
 
-_SUN_ALLOWED = ("three finite numbers X Y Z, the direction towards the sun, with a length of at least 1e-9 "
-                "whose square is finite (|X|, |Y|, |Z| below about 1e154)")
+SUN_ALLOWED = ("three finite numbers X Y Z, the direction towards the sun, with a length of at least 1e-9 "
+               "whose square is finite (|X|, |Y|, |Z| below about 1e154)")
+# What each option allows, for messages: a command's own options here, the scene options' joined from their
+# table (.option_table) when it is imported.
 OPTION_ALLOWED = {
     "name": f"a name of 1-{MAX_NAME} characters without '/', '\\' or NUL, not starting with '.'",
     "preset": "one of " + ", ".join(sorted(PRESETS)),
     "params": "the path of a .json or .toml file of parameter values",
     "blend": "the path of a .blend file",
     "object": "the name of the object in the .blend that gets the material",
-    "backend": "one of " + ", ".join(policy.BACKENDS),
-    "samples": "an integer in [1, 1000000]",
     "resolution": f"N or WxH with integers in [1, {MAX_RESOLUTION}]",
-    "sun": _SUN_ALLOWED,
-    "sun_strength": "a number in [0, 1e+06]",
-    "seed": f"an integer in [0, {2**31 - 1}]",
-    "threads": "an integer in [1, 1024]",
     "output": "a file path stem in a writable folder (STEM.png, STEM.exr and STEM.json are written)",
 }
 
@@ -165,7 +160,7 @@ def parse_sun(value: Any) -> tuple[float, float, float]:
     """Three finite numbers whose direction can be taken: the direction from the scene
     towards the sun.  Refused: non-finite components, a length below 1e-9, and a squared
     length that overflows (the renderer would fall back to straight up)."""
-    allowed = _SUN_ALLOWED
+    allowed = SUN_ALLOWED
     check_plain("sun", value)
     if isinstance(value, str):
         value = value.replace(",", " ").split()

@@ -15,15 +15,24 @@ from typing import Any, Iterable, Mapping, Sequence
 from ..model import policy
 from ..model.params import LayeredParams, ParameterError
 from ..model.presets import PRESETS, preset
+from ..io.staging import OutputPaths, TargetError, check_targets, output_stem
 from ..model.sphere import OrthoCamera, Sun
 from .input_files import check_blend_file, file_label, from_file, load_params_file, merged_values, same_file
+from .option_table import options_of, read_options
 from .option_values import (MAX_STEM_BYTES, MAX_TEXT, OPTION_ALLOWED, PARAM_NAMES, check_name, check_plain,
-                            float_option, int_option, option_flag, parse_resolution, parse_sun, short_name, shown)
-from ..io.staging import OutputPaths, TargetError, check_targets, output_stem
+                            option_flag, parse_resolution, short_name, shown)
 
-RUN_OPTIONS = ("name", "preset", "params", "blend", "object", "backend", "samples", "resolution", "sun",
-               "sun_strength", "seed", "threads", "output")
-REFERENCE_ONLY = ("sun", "sun_strength")  # options of the reference scene only
+RENDER_OWN = ("name", "preset", "params", "blend", "object", "resolution", "output")  # render's own options
+
+
+def run_options() -> tuple[str, ...]:
+    """The options of ``render`` (and of a job): its own, then the scene options its table declares."""
+    return RENDER_OWN + tuple(s.name for s in options_of("render"))
+
+
+def reference_only() -> tuple[str, ...]:
+    """The options of the reference scene only (a .blend has its own lights)."""
+    return tuple(s.name for s in options_of("render") if s.reference_only)
 REFERENCE_SAMPLES = 1
 REFERENCE_RESOLUTION = 128
 REFERENCE_THREADS = 2
@@ -48,6 +57,7 @@ class RenderRequest:
     blend: Path | None = None
     object: str | None = None
     name: str | None = None
+    scene_options: Mapping[str, Any] = field(default_factory=dict)  # every table option given, as read
 
     @property
     def paths(self) -> OutputPaths:
@@ -80,17 +90,13 @@ class RenderRequest:
                 argv += [flag, repr(value) if isinstance(value, float) else str(value)]
         if self.blend:
             argv += ["--blend", str(self.blend), f"--object={self.object}"]
-        argv += ["--backend", self.backend, "--seed", str(self.seed)]
-        if self.samples is not None:
-            argv += ["--samples", str(self.samples)]
+        for spec in options_of("render"):  # the request's value where it has a field, else as read
+            value = getattr(self, spec.name) if spec.name in self.__dataclass_fields__ else \
+                self.scene_options.get(spec.name)
+            if value is not None:
+                argv += spec.to_argv(value)
         if self.resolution is not None:
             argv += ["--resolution", f"{self.resolution[0]}x{self.resolution[1]}"]
-        if self.sun is not None:
-            argv += ["--sun", *(repr(float(c)) for c in self.sun)]
-        if self.sun_strength is not None:
-            argv += ["--sun-strength", repr(float(self.sun_strength))]
-        if self.threads is not None:
-            argv += ["--threads", str(self.threads)]
         if self.name:
             argv.append(f"--name={self.name}")
         argv += ["--output", str(self.output)]
@@ -167,8 +173,8 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
     """
     opts = {k: v for k, v in options.items() if v is not None}
     for key in opts:
-        if key not in RUN_OPTIONS and key not in PARAM_NAMES:
-            raise ParameterError(short_name(key), shown(opts[key]), "a render option (" + ", ".join(RUN_OPTIONS)
+        if key not in run_options() and key not in PARAM_NAMES:
+            raise ParameterError(short_name(key), shown(opts[key]), "a render option (" + ", ".join(run_options())
                                  + ") or a parameter name (" + ", ".join(PARAM_NAMES) + ")")
         check_plain(key, opts[key])
     base = Path(base_dir) if base_dir is not None else None
@@ -194,7 +200,8 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
             raise from_file(e, file_values, label, overridden=overrides) from None
         overrides = {k: getattr(params, k) for k in overrides}
 
-    backend = opts.get("backend", "nodes")
+    scene = read_options("render", opts)
+    backend = scene.get("backend", "nodes")
     try:
         policy.check_backend(backend, params.lobe)
     except ParameterError as e:
@@ -206,18 +213,14 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
         obj = opts.get("object")
         if not isinstance(obj, str) or not obj:
             raise ParameterError("object", shown(obj), "the name of the object in the .blend that gets the material")
-        for key in REFERENCE_ONLY:
+        for key in reference_only():
             if key in opts:
                 raise ParameterError(key, opts[key], "no value with a .blend (the file's own lights are used)")
     elif "object" in opts:
         raise ParameterError("object", opts["object"], "no value without a .blend (the reference scene has one sphere)")
 
-    samples = int_option("samples", opts["samples"], 1, 1_000_000) if "samples" in opts else None
+    samples, threads = scene.get("samples"), scene.get("threads")
     resolution = parse_resolution(opts["resolution"]) if "resolution" in opts else None
-    sun = parse_sun(opts["sun"]) if "sun" in opts else None
-    strength = float_option("sun_strength", opts["sun_strength"], 0.0, 1e6) if "sun_strength" in opts else None
-    seed = int_option("seed", opts.get("seed", 0), 0, 2**31 - 1)
-    threads = int_option("threads", opts["threads"], 1, 1024) if "threads" in opts else None
     if blend is None:
         samples = REFERENCE_SAMPLES if samples is None else samples
         resolution = resolution or (REFERENCE_RESOLUTION, REFERENCE_RESOLUTION)
@@ -235,5 +238,5 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
     output = check_output(out, inputs=[*inputs, *extra_inputs], confine_to=out_base if confine else None)
     return RenderRequest(params=params, output=output, backend=backend, preset=preset_name,
                          params_file=params_file, overrides=overrides, samples=samples, resolution=resolution,
-                         sun=sun, sun_strength=strength, seed=seed, threads=threads, blend=blend, object=obj,
-                         name=name)
+                         sun=scene.get("sun"), sun_strength=scene.get("sun_strength"), seed=scene.get("seed", 0),
+                         threads=threads, blend=blend, object=obj, name=name, scene_options=scene)
