@@ -49,3 +49,17 @@ def test_the_table_s_options_are_each_command_s_own():
     assert [s.name for s in options_of("render")] == ["backend", "samples", "sun", "sun_strength", "seed", "threads"]
     assert set(requests.run_options()) >= {s.name for s in options_of("render")}
     assert requests.reference_only() == ("sun", "sun_strength")
+
+
+def test_readme_s_table_of_scene_options_is_the_table():
+    """README lists each scene option with what it sets and allows, as the table declares them."""
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
+    start = readme.index("| option | what | allowed |")
+    rows = [line for line in readme[start:].splitlines()[2:] if line.startswith("| `--")]
+    listed = {row.split("|")[1].strip().strip("`"): row for row in rows}
+    assert list(listed) == [s.flag for s in option_table.SCENE_OPTIONS]
+    for s in option_table.SCENE_OPTIONS:
+        cells = [c.strip() for c in listed[s.flag].replace("\\|", "PIPE").split("|")[1:-1]]  # README escapes a pipe in a cell
+        assert cells[1:] == [s.help, s.allowed.replace("|", "PIPE")], s.name
