@@ -9,23 +9,20 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from layered_brdf_addon.fit.cycles_closures import evaluate_closures
-from layered_brdf_addon.model import preset, program
-from layered_brdf_addon.model.ops_numpy import vec
+from layered_brdf_addon.model import preset
 from layered_brdf_addon.model.policy import plan_effects, render_plan, tables_fallback
 from layered_brdf_addon.model.presets import ARTIST_PRESETS
 from layered_brdf_addon.model.shading.tables import NotTabulable
-from layered_brdf_addon.model.table_bake import (MAX_TABLE_BYTES, bake, table_digest, table_layout,
-                                                 tabulated_result)
-from layered_brdf_addon.model.sphere import shading_point
-from layered_brdf_addon.model.table_check import PROBE_POINTS, PROBE_SEED, base_share, check_tables
+from layered_brdf_addon.model.table_bake import MAX_TABLE_BYTES, bake, table_digest, table_layout
+from layered_brdf_addon.model.table_check import PROBE_POINTS, PROBE_SEED, check_tables
 
-# Tables vs computed closures at random points, lights within three lobe widths of the mirror
-# direction (where the sharp lobes' light is): the L1 difference of the light leaving, and the
-# fraction of points where a channel differs by more than the render tests' 2%.
+# Tables vs computed closures at random points (model/table_check.py's probes, another seed): the L1
+# difference of the light leaving for lights within three lobe widths of the mirror direction, the
+# share of the points whose highlight is more than 2% off, and what passes to the base.
 L1_TOL = 0.005  # measured 0.02-0.22% (the soap film's the largest)
-FAILING_TOL = 0.02  # measured 0.01-0.96%
+FAILING_TOL = 0.02  # measured 0.0-0.2%
 POINTS = 20000
+TEST_SEED = 12345
 MODES = {
     **{name: preset(name) for name in ARTIST_PRESETS},
     "oil rgb": preset("oil_slick").replace(accuracy="rgb"),
@@ -39,43 +36,21 @@ MODES = {
 }
 
 
-def _points(p, rng, n=POINTS):
-    cos_v = rng.uniform(0.02, 1.0, n)
-    phi = rng.uniform(0.0, 2.0 * np.pi, n)
-    s = np.sqrt(1.0 - cos_v ** 2)
-    v = np.stack([s * np.cos(phi), s * np.sin(phi), cos_v], axis=-1)
-    n0 = np.zeros_like(v)
-    n0[:, 2] = 1.0
-    mirror = 2.0 * cos_v[:, None] * n0 - v
-    l = mirror + rng.normal(0.0, 3.0 / np.sqrt(min(p.e0, p.e1)), (n, 3))
-    l[:, 2] = np.abs(l[:, 2])
-    l /= np.linalg.norm(l, axis=-1, keepdims=True)
-    d = rng.uniform(min(p.d_min, p.d_max), max(p.d_min, p.d_max), n)
-    return n0, v, l, d
-
-
-def light_computed_and_tabulated(p, rng):
-    """The light leaving (per unit irradiance) at random points: computed closures, and tabulated."""
+def light_check(p, points=POINTS):
+    """Tables against the closures computed per point (:func:`check_tables`) at probes of another seed than the
+    bake's own check, five times as many."""
     plan = plan_effects(p)
     assert plan.tables, plan.key
     layout, texels = bake(p, plan)
-    n0, v, l, d = _points(p, rng)
-    pt = shading_point(p, n0, np.zeros_like(n0), view=v)
-    computed = program.layered_surface(pt, replace(plan, tables=False), thickness=d)
-    tabulated = tabulated_result(p, plan, layout, texels, n0, v, d)
-    return (evaluate_closures(computed, n0, v, l), evaluate_closures(tabulated, n0, v, l),
-            base_share(computed, d.shape), base_share(tabulated, d.shape))
+    return layout, texels, check_tables(p, plan, layout, texels, points=points, seed=TEST_SEED)
 
 
 @pytest.mark.parametrize("name", list(MODES))
-def test_tables_give_the_closures_the_program_computes(name, rng):
-    a, b, base_a, base_b = light_computed_and_tabulated(MODES[name], rng)
-    l1 = np.abs(a - b).sum() / np.abs(a).sum()
-    failing = np.mean(np.abs(a - b).max(axis=-1) > 0.02 * np.maximum(a.max(axis=-1), 1e-3 * a.max()))
-    print(f"{name}: L1 {100 * l1:.3f}%, points off by > 2%: {100 * failing:.2f}%, "
-          f"Base Shader factor within {np.abs(base_a - base_b).max():.4f}")
-    assert l1 <= L1_TOL and failing <= FAILING_TOL
-    assert np.abs(base_a - base_b).max() <= 0.02
+def test_tables_give_the_closures_the_program_computes(name):
+    _, _, check = light_check(MODES[name])
+    print(f"{name}: L1 {100 * check.l1:.3f}%, highlights off by > 2%: {100 * check.failing:.2f}%, "
+          f"what passes to the base within {check.base:.4f}")
+    assert check.l1 <= L1_TOL and check.failing <= FAILING_TOL and check.base <= 0.02
 
 
 def test_tables_stay_small_and_finite_for_hard_values():
@@ -121,34 +96,15 @@ TILTED = {
     "even tilted": preset("fig6_medium").replace(d_max=preset("fig6_medium").d_min),
 }
 L1_TOL_TILTED = 0.03
-FAILING_TOL_TILTED = 0.16
-
-
-def _lower_normals(p, rng, n):
-    """Tilt axes about ``n0 = +z`` at random azimuths, and the lower normals of ``p``'s tilt about them."""
-    azimuth = rng.uniform(0.0, 2.0 * np.pi, n)
-    axes = np.stack([-np.sin(azimuth), np.cos(azimuth), np.zeros(n)], -1)
-    t = np.radians(p.tilt)
-    return axes, np.stack([np.sin(t) * np.cos(azimuth), np.sin(t) * np.sin(azimuth), np.full(n, np.cos(t))], -1)
+FAILING_TOL_TILTED = 0.2  # the seam (docs/tables.md): measured 11-18%
 
 
 @pytest.mark.parametrize("name", list(TILTED))
-def test_tilted_tables_give_the_closures_the_program_computes(name, rng):
-    p = TILTED[name]
-    plan = plan_effects(p)
-    assert plan.tables, plan.key
-    layout, texels = bake(p, plan)
+def test_tilted_tables_give_the_closures_the_program_computes(name):
+    layout, texels, check = light_check(TILTED[name])
     assert layout.sliced and layout.oriented and texels.nbytes <= MAX_TABLE_BYTES
-    n0, v, l, d = _points(p, rng)
-    axes, n1 = _lower_normals(p, rng, len(d))
-    pt = shading_point(p, n0, np.zeros_like(n0), view=v)
-    computed = program.layered_surface(pt, replace(plan, tables=False), thickness=d, lower=vec(n1), axis=vec(axes))
-    tabulated = tabulated_result(p, plan, layout, texels, n0, v, d, axes)
-    a, b = evaluate_closures(computed, n0, v, l), evaluate_closures(tabulated, n0, v, l)
-    l1 = np.abs(a - b).sum() / np.abs(a).sum()
-    failing = np.mean(np.abs(a - b).max(axis=-1) > 0.02 * np.maximum(a.max(axis=-1), 1e-3 * a.max()))
-    print(f"{name}: L1 {100 * l1:.3f}%, points off by > 2%: {100 * failing:.2f}%")
-    assert l1 <= L1_TOL_TILTED and failing <= FAILING_TOL_TILTED
+    print(f"{name}: L1 {100 * check.l1:.3f}%, highlights off by > 2%: {100 * check.failing:.2f}%")
+    assert check.l1 <= L1_TOL_TILTED and check.failing <= FAILING_TOL_TILTED
 
 
 def test_the_digest_of_a_tilted_boundary_follows_its_tilt_not_its_azimuth():

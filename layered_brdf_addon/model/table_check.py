@@ -73,7 +73,7 @@ class TableCheck:
                 "point")
 
 
-def _probes(params: LayeredParams, n: int, seed: int):
+def probes(params: LayeredParams, n: int, seed: int = PROBE_SEED):
     """Views from normal to grazing about ``n0 = +z``, lights within three lobe widths of the mirror direction
     (where the sharp lobes' light is), thicknesses over the range, tilt axes at every azimuth and the tilted
     lower normals about them."""
@@ -99,7 +99,7 @@ def check_tables(params: LayeredParams, plan: EffectPlan, layout, texels, points
                  seed: int = PROBE_SEED) -> TableCheck:
     """How far the tables ``texels`` (``layout``, a bake of ``params`` for ``plan``) are from the program at
     ``points`` probes (``seed``: another set of them)."""
-    n0, v, light, d, axes, n1 = _probes(params, points, seed)
+    n0, v, light, d, axes, n1 = probes(params, points, seed)
     if plan.normals != "tilted":
         n1 = n0
     pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0))
