@@ -30,7 +30,8 @@ def measure(name, p, seed=1):
 
 def main():
     table_bake.MAX_TABLE_BYTES = 1 << 28  # measure past the budget (the planner holds to 1 MB)
-    print("| preset | azimuth slices | L1 | highlights off by > 2% | bake (ms) | tables (kB) |\n|---|---|---|---|---|---|")
+    print("| preset | azimuth slices | L1 | highlights off by > 2% | bake (ms) | tables (kB) |\n"
+          "|---|---|---|---|---|---|")
     for name in sys.argv[1:] or ["fig4_tilted", "fig6_thin", "fig6_medium"]:
         for slices in (9, 17, 25, 33):
             table_bake.AZIMUTH_SAMPLES = slices

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Collection, Iterable, Sequence
 
 from .. import __version__
+from ..io.staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 from ..model.params import PARAM_SPECS, ParameterError
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 from .fit_command import cmd_fit
@@ -41,7 +42,6 @@ from .options import (EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK, Argu
 from .render_job import execute_render
 from .requests import request_from_options, run_options
 from .runner import check_report_target, exit_code, follow_parent, run_batch, write_report
-from ..io.staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 
 PROG = "layered-brdf"
 COMMANDS = ("lookdev", "gallery", "render", "batch", "fit")

@@ -34,6 +34,7 @@ from typing import Callable, Sequence
 from ..fit import solve
 from ..fit.free import check_vary, default_vary, film_vary
 from ..fit.solve import FitCancelled
+from ..io.staging import InterruptGuard
 from ..model.params import LayeredParams
 from .fit_options import STARTS_RANGE, start_of
 from .fit_outputs import (check_output, default_output, fit_record, output_document, reflectance_figure,
@@ -41,7 +42,6 @@ from .fit_outputs import (check_output, default_output, fit_record, output_docum
 from .fit_targets import load_principled_target, load_reflectance_target, load_render_target, source_of
 from .option_values import int_option
 from .options import EXIT_OK
-from ..io.staging import InterruptGuard
 
 STEPS_PER_START = 40  # the optimiser's steps from each start
 

@@ -15,13 +15,13 @@ import numpy as np
 
 from .. import __version__
 from ..fit import colour_space
-from ..model.params import LayeredParams, ParameterError
 from ..io.codecs import to_srgb8
+from ..io.sidecar import write_json
+from ..io.staging import OutputPaths, StagedOutputs, TargetError, check_targets, output_stem, writing
+from ..model.params import LayeredParams, ParameterError
 from .fit_targets import LoadedTarget, Source
 from .input_files import same_file
 from .option_values import MAX_STEM_BYTES, MAX_TEXT, shown
-from ..io.sidecar import write_json
-from ..io.staging import OutputPaths, StagedOutputs, TargetError, check_targets, output_stem, writing
 
 PRESET_FORMAT = "layered_brdf.preset"  # the panel's user presets (blender/user_presets.py)
 PRESET_FORMAT_VERSION = 1

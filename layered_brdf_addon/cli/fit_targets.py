@@ -22,14 +22,14 @@ from ..blender import tempdirs
 from ..fit.environment import DEFAULT_HDRIS
 from ..fit.targets import ReflectanceTarget, SphereTarget, SphereView
 from ..fit.targets import TargetError as FitTargetError
+from ..io.codecs import exr_beauty, muted_stderr, read_complete_exr_layers
+from ..io.sidecar import SIDECAR_FORMAT, scene_from_sidecar
+from ..io.staging import OutputPaths, output_stem
 from ..model.params import ParameterError
 from ..model.sphere import sphere_geometry
-from ..io.codecs import exr_beauty, muted_stderr, read_complete_exr_layers
 from .input_files import MAX_INPUT_BYTES, check_blend_file, file_label, read_regular_file, read_table_file
 from .option_values import int_option, path_option, shown
 from .options import blender_output
-from ..io.sidecar import SIDECAR_FORMAT, scene_from_sidecar
-from ..io.staging import OutputPaths, output_stem
 
 PRINCIPLED_SIZE = 96
 PRINCIPLED_SIZES = (8, 4096)  # pixels of each render

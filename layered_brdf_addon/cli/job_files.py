@@ -6,11 +6,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..io.staging import TargetError, check_targets
 from ..model.params import ParameterError
 from .input_files import read_table_file, same_file
 from .option_values import check_name, short_name, shown
 from .requests import RenderRequest, reference_only, request_from_options
-from ..io.staging import TargetError, check_targets
 
 
 @dataclass

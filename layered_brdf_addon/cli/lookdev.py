@@ -23,16 +23,16 @@ import numpy as np
 
 from .. import __version__
 from ..blender import tempdirs
+from ..io.codecs import muted_stderr, save_png
+from ..io.sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, write_json
+from ..io.staging import (InterruptGuard, StagedOutputs, TargetError, check_targets, output_stem, reading_back,
+                          writing)
 from ..model.params import ParameterError
 from ..model.policy import render_plan
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
-from ..io.codecs import muted_stderr, save_png
 from .gallery import GalleryLayout, compose_sheet, layout_for
 from .option_values import check_preset_names, int_option
 from .render_job import view_png_encoding
-from ..io.sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, write_json
-from ..io.staging import (InterruptGuard, StagedOutputs, TargetError, check_targets, output_stem, reading_back,
-                      writing)
 
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"
 DEFAULT_PRESETS = tuple(ARTIST_PRESETS) + tuple(PAPER_PRESETS)

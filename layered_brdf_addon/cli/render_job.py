@@ -22,12 +22,12 @@ import numpy as np
 
 from .. import __version__
 from ..blender import tempdirs
-from ..model.params import ParameterError
-from ..model.policy import render_plan, tables_fallback
 from ..io.codecs import exr_beauty, muted_stderr, read_complete_exr_layers, replace_exr_layers, save_png, to_srgb8
-from .requests import RenderRequest
 from ..io.sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dict, write_json
 from ..io.staging import InterruptGuard, OutputPaths, StagedOutputs, reading_back, writing
+from ..model.params import ParameterError
+from ..model.policy import render_plan, tables_fallback
+from .requests import RenderRequest
 
 PNG_ENCODING = "8-bit sRGB, Blender's Standard view transform (clipped to [0, 1])"
 

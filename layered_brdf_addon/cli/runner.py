@@ -17,10 +17,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
-from ..model.params import ParameterError
-from .job_files import Job
 from ..io.sidecar import to_jsonable
 from ..io.staging import OutputPaths, remove_stale_temps
+from ..model.params import ParameterError
+from .job_files import Job
 
 
 @dataclass
