@@ -27,13 +27,11 @@ from ..model.params import PARAM_SPECS, ParameterError
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
 from .fit_command import cmd_fit
 from .fit_options import add_parser as add_fit_parser
-from .gallery import DEFAULT_SIZE as GALLERY_SIZE
-from .gallery import SIZE_RANGE as GALLERY_SIZES
 from .gallery import render_gallery, summary_rows
 from .gallery import settings_from_options as gallery_settings
 from .input_files import FileValueError
 from .job_files import load_job_file
-from .lookdev import DEFAULT_OUTPUT, DEFAULT_SAMPLES, DEFAULT_SIZE, SAMPLES_RANGE, SIZE_RANGE, render_lookdev
+from .lookdev import DEFAULT_OUTPUT, render_lookdev
 from .lookdev import settings_from_options as lookdev_settings
 from .option_table import add_options, options_of
 from .option_values import PARAM_NAMES, float_option, int_option, unit_notes
@@ -67,18 +65,13 @@ def build_parser() -> argparse.ArgumentParser:
                         "labelled sheet encoded with the scene's AgX view transform: STEM.png and the sidecar "
                         "STEM.json, written together or not at all.")
     ld.add_argument("--output", default=None, metavar="PATH", help=f"the sheet (default {DEFAULT_OUTPUT})")
-    ld.add_argument("--size", default=None, metavar="PX",
-                    help=f"pixels per tile, an integer in [{SIZE_RANGE[0]}, {SIZE_RANGE[1]}] (default {DEFAULT_SIZE})")
-    ld.add_argument("--samples", default=None, metavar="N",
-                    help=f"samples per pixel, an integer in [{SAMPLES_RANGE[0]}, {SAMPLES_RANGE[1]}] "
-                    f"(default {DEFAULT_SAMPLES})")
+    add_options(ld, "lookdev")  # --size, --samples, --columns
     ld.add_argument("--presets", nargs="+", default=None, metavar="NAME",
                     help="the presets to show (default: every artist preset, then the paper's figures): "
                     + ", ".join(list(ARTIST_PRESETS) + list(PAPER_PRESETS)))
     ld.add_argument("--hdri", default=None, metavar="NAME",
                     help="one of Blender's bundled HDRIs: forest (default), courtyard, studio, city, interior, "
                     "night, sunrise, sunset")
-    ld.add_argument("--columns", default=None, metavar="N", help="tiles per row (default: a square grid)")
     ld.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
     ld.add_argument("--verbose", action="store_true", help="show Blender's own log")
 
@@ -87,13 +80,10 @@ def build_parser() -> argparse.ArgumentParser:
                        + ", ".join(PAPER_PRESETS) + ") as spheres in one scene, one render, and compose "
                        "a labelled contact sheet STEM.png, with STEM.exr and the sidecar STEM.json.")
     g.add_argument("--output", default=None, metavar="PATH", help="the contact sheet (default out/gallery.png)")
-    g.add_argument("--size", default=None, metavar="PX", help=f"pixels per tile, an integer in [{GALLERY_SIZES[0]}, "
-                   f"{GALLERY_SIZES[1]}] (default {GALLERY_SIZE})")
-    g.add_argument("--columns", default=None, metavar="N", help="tiles per row (default: a square grid)")
     g.add_argument("--presets", nargs="+", default=None, metavar="NAME",
                    help="other presets to show instead of the paper's (any of: "
                    + ", ".join(list(PAPER_PRESETS) + list(ARTIST_PRESETS)) + ")")
-    _add_scene_options(g, "gallery")
+    _add_scene_options(g, "gallery")  # with --size and --columns
 
     r = sub.add_parser("render", help="one material on the reference sphere or on an object of a .blend",
                        description="Render one material; write STEM.png (8-bit sRGB: the reference sphere with the "
@@ -168,6 +158,11 @@ def _numeric(s: str) -> bool:
 
 
 # ---------------------------------------------------------------------------
+def _table_names(command: str) -> tuple[str, ...]:
+    """The names of ``command``'s options that the option table declares."""
+    return tuple(spec.name for spec in options_of(command))
+
+
 def _options(ns: argparse.Namespace, names: Sequence[str]) -> dict[str, Any]:
     return {n: getattr(ns, n) for n in names if getattr(ns, n, None) is not None}
 
@@ -189,8 +184,7 @@ def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``gallery``: render the paper's configurations into one labelled contact sheet."""
-    s = gallery_settings(_options(ns, ("output", "size", "columns", "presets")
-                                  + tuple(spec.name for spec in options_of("gallery"))))
+    s = gallery_settings(_options(ns, ("output", "presets") + _table_names("gallery")))
     with blender_output(ns.verbose):
         res = render_gallery(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv])
     headers, rows = summary_rows(res)
@@ -204,7 +198,7 @@ def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_lookdev(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``lookdev``: every preset on the shader ball, one labelled sheet."""
-    s = lookdev_settings(_options(ns, ("output", "size", "samples", "presets", "hdri", "columns")))
+    s = lookdev_settings(_options(ns, ("output", "presets", "hdri") + _table_names("lookdev")))
     with blender_output(ns.verbose):
         res = render_lookdev(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv], progress=ns.progress)
     rows = [[t["name"], t["label"][0], f"{t['render_seconds']:.1f}"] for t in res.tiles]

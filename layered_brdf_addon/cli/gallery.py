@@ -23,15 +23,14 @@ from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects, render_plan
 from ..model.presets import PAPER_PRESETS, preset
 from ..model.sphere import OrthoCamera, Sun
-from .option_table import read_options
-from .option_values import check_preset_names, int_option
+from .option_table import GALLERY_SAMPLES, GALLERY_SIZE, read_options
+from .option_values import check_preset_names
 from .render_job import render_outputs, sidecar
 from .requests import check_output
 
 SPACING = 2.2  # centre distance of neighbouring spheres (unit radius): a 10% margin per tile
-DEFAULT_SIZE = 128
-SIZE_RANGE = (16, 4096)  # pixels per tile
-DEFAULT_SAMPLES = 16
+DEFAULT_SIZE = GALLERY_SIZE
+DEFAULT_SAMPLES = GALLERY_SAMPLES
 DEFAULT_OUTPUT = Path("out") / "gallery.png"
 ANTIALIAS_FILTER_WIDTH = 1.5  # Blender's default pixel filter, used when there is more than one sample
 BACKGROUND = (24, 24, 26)
@@ -208,11 +207,9 @@ def check_preset_lobe(name: str, backend: str) -> None:
 def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     """Validate gallery options (``output``, ``size``, ``samples``, ``backend``, ...) without Blender."""
     o = {k: v for k, v in options.items() if v is not None}
-    size = int_option("size", o.get("size", DEFAULT_SIZE), *SIZE_RANGE)
     scene = read_options("gallery", o)
-    samples = scene.get("samples", DEFAULT_SAMPLES)
-    backend = scene.get("backend", "nodes")
-    columns = int_option("columns", o["columns"], 1, 64) if "columns" in o else None
+    size, samples = scene.get("size", DEFAULT_SIZE), scene.get("samples", DEFAULT_SAMPLES)
+    backend, columns = scene.get("backend", "nodes"), scene.get("columns")
     sun, strength = scene.get("sun"), scene.get("sun_strength")
     seed, threads = scene.get("seed", 0), scene.get("threads", 2)
     names = check_preset_names(o.get("presets") or PAPER_PRESETS)

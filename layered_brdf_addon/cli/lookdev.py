@@ -31,16 +31,14 @@ from ..model.params import ParameterError
 from ..model.policy import render_plan
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
 from .gallery import GalleryLayout, compose_sheet, layout_for
-from .option_values import check_preset_names, int_option
+from .option_table import LOOKDEV_SAMPLES, LOOKDEV_SIZE, read_options
+from .option_values import check_preset_names
 from .render_job import view_png_encoding
 
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"
 DEFAULT_PRESETS = tuple(ARTIST_PRESETS) + tuple(PAPER_PRESETS)
-# Sized for about a minute on two cores (measured: docs/looks.md).
-DEFAULT_SIZE = 192
-DEFAULT_SAMPLES = 32
-SIZE_RANGE = (16, 2048)
-SAMPLES_RANGE = (1, 4096)
+DEFAULT_SIZE = LOOKDEV_SIZE
+DEFAULT_SAMPLES = LOOKDEV_SAMPLES
 BACKEND = "nodes"
 
 
@@ -85,13 +83,13 @@ def settings_from_options(options: dict[str, Any]) -> LookdevSettings:
     """Validate ``lookdev`` options without Blender (the HDRI's name is checked when Blender
     is loaded, before anything is written)."""
     o = {k: v for k, v in options.items() if v is not None}
-    size = int_option("size", o.get("size", DEFAULT_SIZE), *SIZE_RANGE)
-    samples = int_option("samples", o.get("samples", DEFAULT_SAMPLES), *SAMPLES_RANGE)
+    sheet = read_options("lookdev", o)
+    size, samples = sheet.get("size", DEFAULT_SIZE), sheet.get("samples", DEFAULT_SAMPLES)
     names = check_preset_names(o.get("presets") or DEFAULT_PRESETS)
     hdri = o.get("hdri")
     if hdri is not None and (not isinstance(hdri, str) or not hdri.strip() or "/" in hdri):
         raise ParameterError("hdri", hdri, "the name of one of Blender's bundled HDRIs (forest, courtyard, ...)")
-    columns = int_option("columns", o["columns"], 1, 64) if "columns" in o else None
+    columns = sheet.get("columns")
     output = check_sheet_output(o.get("output", DEFAULT_OUTPUT))
     return LookdevSettings(output=output, size=size, samples=samples, presets=names, hdri=hdri, columns=columns)
 

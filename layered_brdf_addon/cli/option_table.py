@@ -1,7 +1,9 @@
-"""The scene options of the command line, declared once: name, value, range, help and the commands that take
-them.  The argument parsers (``--help`` with each range), the options a job file may hold, their validation
-and the arguments that reproduce a render are made from :data:`SCENE_OPTIONS`; a command's own options (a
-render's material and output, a gallery's tiles) stay with the command.
+"""The command line's options, declared once: name, value, range, help and the commands that take them.  The
+argument parsers (``--help`` with each range), the options a job file may hold, their validation and the
+arguments that reproduce a render are made from :data:`SCENE_OPTIONS` (the scene: backend, samples, sun...)
+and :data:`SHEET_OPTIONS` (a sheet's tiles: size, columns, look-dev samples); the options that name a
+material, a file or an output stay with their command.  An option whose range differs between commands
+(a tile's size) is declared once per range.
 
 Nothing here imports bpy.
 """
@@ -18,6 +20,12 @@ MAX_SAMPLES = 1_000_000
 MAX_SEED = 2**31 - 1
 MAX_THREADS = 1024
 MAX_SUN_STRENGTH = 1.0e6
+MAX_COLUMNS = 64
+GALLERY_SIZE, GALLERY_SIZES = 128, (16, 4096)  # pixels per tile: the default, the range
+GALLERY_SAMPLES = 16
+# The look-dev sheet, sized for about a minute on two cores (measured: docs/looks.md).
+LOOKDEV_SIZE, LOOKDEV_SIZES = 192, (16, 2048)
+LOOKDEV_SAMPLES, LOOKDEV_SAMPLING = 32, (1, 4096)
 
 
 @dataclass(frozen=True)
@@ -72,7 +80,7 @@ SCENE_OPTIONS = (
     OptionSpec("samples", "samples per pixel", f"an integer in [1, {MAX_SAMPLES}]", _ints(1, MAX_SAMPLES),
                ("render", "gallery"),
                defaults={"render": "1 on the reference sphere, exact under a zero-angle sun; a .blend's own",
-                         "gallery": "16; one is exact under the sun, more anti-alias"}),
+                         "gallery": f"{GALLERY_SAMPLES}; one is exact under the sun, more anti-alias"}),
     OptionSpec("sun", "direction from the scene towards the zero-angle sun", SUN_ALLOWED,
                lambda name, value: parse_sun(value),
                ("render", "gallery"), defaults={"render": "0.5 -1 0.6", "gallery": "0.5 -1 0.6"},
@@ -87,12 +95,25 @@ SCENE_OPTIONS = (
 )
 
 
-OPTION_ALLOWED.update({s.name: s.allowed for s in SCENE_OPTIONS})  # every message names what an option allows
+SHEET_OPTIONS = (
+    OptionSpec("size", "pixels per tile", f"an integer in [{GALLERY_SIZES[0]}, {GALLERY_SIZES[1]}]",
+               _ints(*GALLERY_SIZES), ("gallery",), defaults={"gallery": str(GALLERY_SIZE)}, metavar="PX"),
+    OptionSpec("size", "pixels per tile", f"an integer in [{LOOKDEV_SIZES[0]}, {LOOKDEV_SIZES[1]}]",
+               _ints(*LOOKDEV_SIZES), ("lookdev",), defaults={"lookdev": str(LOOKDEV_SIZE)}, metavar="PX"),
+    OptionSpec("samples", "samples per pixel", f"an integer in [{LOOKDEV_SAMPLING[0]}, {LOOKDEV_SAMPLING[1]}]",
+               _ints(*LOOKDEV_SAMPLING), ("lookdev",), defaults={"lookdev": str(LOOKDEV_SAMPLES)}),
+    OptionSpec("columns", "tiles per row", f"an integer in [1, {MAX_COLUMNS}]", _ints(1, MAX_COLUMNS),
+               ("gallery", "lookdev"), defaults={"gallery": "a square grid", "lookdev": "a square grid"}),
+)
+# Every message names what an option allows (an option declared for two ranges: each command's own validator
+# names its range; a value no option takes, the first).
+OPTION_ALLOWED.update({s.name: s.allowed for s in reversed(SCENE_OPTIONS + SHEET_OPTIONS)})
 
 
 def options_of(command: str, table=None) -> tuple[OptionSpec, ...]:
-    """The table's options that ``command`` takes (``table``: :data:`SCENE_OPTIONS` by default)."""
-    return tuple(s for s in (SCENE_OPTIONS if table is None else table) if command in s.commands)
+    """The options that ``command`` takes (``table``: :data:`SCENE_OPTIONS` and :data:`SHEET_OPTIONS` by
+    default)."""
+    return tuple(s for s in (SCENE_OPTIONS + SHEET_OPTIONS if table is None else table) if command in s.commands)
 
 
 def add_options(parser: argparse.ArgumentParser | argparse._ArgumentGroup, command: str) -> None:
