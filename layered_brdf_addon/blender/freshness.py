@@ -9,11 +9,11 @@ look.  Three handlers close every path (:func:`install`):
 * after an edit (``depsgraph_update_post``): the materials it touched (a material or its node tree),
   and the copies of the shader node in them;
 * on a frame change (``frame_change_post``): the materials with keyframes or drivers, whose moving
-  parameters a script can change without any update (the others cost a pointer test each);
-* before a render (``render_init``, a still or a whole animation): every local layered material and
-  every copy of a shader node in the file.
+  parameters a script can change without any update (the others cost two pointer tests each);
+* before a render (``render_init``, a still or a whole animation): every local material the add-on built
+  and every copy of a shader node in the file.
 
-``register()`` installs them; :func:`~.build.apply_layered_material` installs them too, so a script that
+``register()`` installs them; :func:`~.material.apply_layered_material` installs them too, so a script that
 only imports the add-on is covered.  They change data only on Blender's main thread (a render started
 from the interface runs its handlers on its own thread, while the edit handler has already run).
 
@@ -66,20 +66,18 @@ def chosen_plan(mat) -> EffectPlan | None:
         return None
 
 
-def _keep_chosen(mat, plan: EffectPlan) -> bool:
-    """Tables of a material built for a chosen plan, rebaked for its current values; False where that plan
-    cannot show them (an animated value that the tables hold), so that it is planned afresh."""
+def _keep_chosen(mat, plan: EffectPlan) -> bool | None:
+    """Tables of a material built for a chosen plan, rebaked for its current values: whether anything was; None
+    where that plan cannot show them (an animated value that the tables hold), so that it is planned afresh."""
     params = params_of(mat)
     if plan.tables and animated_parameters(mat) - unread_by_tables(params.normal_mode):
-        return False
+        return None
     node = shader_node(mat)
     if not plan.tables or node is None:
-        return True
+        return False
     if node.bl_idname == "ShaderNodeGroup":
-        ensure_tables(node, params, plan, check_pixels=False)
-    else:
-        osl_backend.ensure_text(node, params, plan)
-    return True
+        return ensure_tables(node, params, plan, check_pixels=False)
+    return osl_backend.ensure_text(node, params, plan)
 
 
 def freshen(mat) -> bool:
@@ -89,10 +87,11 @@ def freshen(mat) -> bool:
     plan = chosen_plan(mat)
     if plan is not None:
         try:
-            if _keep_chosen(mat, plan):
-                return False
+            kept = _keep_chosen(mat, plan)
         except ParameterError:
             return False
+        if kept is not None:
+            return kept
         del mat[CHOSEN_PLAN_KEY]
     return sync.sync_on_its_own(mat)
 
