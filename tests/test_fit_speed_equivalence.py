@@ -109,4 +109,7 @@ def test_the_slopes_are_scipys_forward_differences(target, name):
     near_bounds = lo + (hi - lo) * np.where(np.arange(lo.size) % 2 == 0, 1.0 - 1e-7, 1e-7)  # steps turned back
     for x in (free.vector(params, 0.05), near_bounds):
         expected = approx_derivative(objective, x, method="2-point", rel_step=DIFF_STEP, bounds=(lo, hi))
-        assert np.allclose(objective.jacobian(x), expected, rtol=1e-6, atol=1e-8 * np.abs(expected).max())
+        # Rounding of the stacked and the single evaluations differs by about 1e-16 of a value, which a
+        # forward difference divides by its step: a slope one run finds 0 the other may find as noise, measured
+        # up to 1.8e-6 of the largest slope on Blender 5.0's numpy, depending on the tests run before.
+        assert np.allclose(objective.jacobian(x), expected, rtol=1e-6, atol=1e-5 * np.abs(expected).max())
