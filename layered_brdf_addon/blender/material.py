@@ -3,9 +3,9 @@ command line and the tests call, and what reads a layered material back.
 
 The work is done in the modules named below; this module gathers their public names:
 
-* :mod:`.build`: building the material (:func:`apply_layered_material`, which also installs the
-  handlers of :mod:`.freshness`, so that a script that never registers the add-on renders what it
-  sets, keys, drives or links);
+* :mod:`.build`: building the material; :func:`apply_layered_material` here builds it, writes the
+  settings it applied and installs the handlers of :mod:`.freshness`, so that a script that never
+  registers the add-on renders what it sets, keys, drives or links;
 * :mod:`.own_nodes`: finding the add-on's shader node (:func:`shader_node`);
 * :mod:`.sockets`: the parameters' values in the node's sockets;
 * :mod:`.animation`: which parameters are animated, driven or linked;
@@ -61,8 +61,7 @@ def apply_layered_material(*args, **kwargs):
 
 __all__ = [
     "AOV_LOWER_NORMAL", "AOV_THICKNESS", "AOV_UPPER_NORMAL", "DISPLACED_KEY", "DataBlockError", "MATERIAL_KEY",
-    "OSLSceneWarning",
-    "NAME_KEY", "ROLE_KEY", "SHADER_NODE", "SLOT_KEY", "SUBGROUP_KEY", "SURFACE_KINDS", "SURFACE_OBJECTS",
+    "NAME_KEY", "OSLSceneWarning", "ROLE_KEY", "SHADER_NODE", "SLOT_KEY", "SUBGROUP_KEY", "SURFACE_KINDS", "SURFACE_OBJECTS",
     "TEXT_KEY", "animated_parameters", "apply_layered_material", "as_rendered", "check_node", "displaced_material",
     "input_linked", "input_value", "missing_inputs", "node_damage", "object_problem", "param_socket", "read_inputs",
     "remove_layered_material", "remove_unused_own_data", "set_inputs", "shader_node", "socket_parameters",

@@ -251,8 +251,9 @@ def execute_render(req: RenderRequest, command: Sequence[str] | None = None,
         paths = req.paths
         # The plan the material was built with: a --blend material's keyframes, drivers and linked
         # sockets keep the effects they may switch on.
-        plan = render_plan(req.params, animated_parameters(material), req.backend)
-        fallback = tables_fallback(req.params, animated_parameters(material), req.backend)
+        animated = animated_parameters(material)
+        plan = render_plan(req.params, animated, req.backend)
+        fallback = tables_fallback(req.params, animated, req.backend)
 
         def describe(render_seconds: float) -> dict[str, Any]:
             return sidecar(
