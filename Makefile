@@ -53,9 +53,11 @@ test: $(STAMP)
 	@$(WHICH)
 	$(PY) -m pytest $(PYTEST_ARGS)
 
-# Rewrite osl/layered_brdf.osl and node_groups/*.json from the shading program.
+# Rewrite osl/layered_brdf.osl and node_groups/*.json from the shading program, docs/options.md from the
+# command line's option table.
 generated: $(STAMP)
 	$(PY) -m layered_brdf_addon.backends.generated
+	$(PY) -m layered_brdf_addon.cli.option_docs
 
 # Refit the analytic mode's closed form (model/data/band_fit.json) from the CIE tables, a few minutes.
 band-fit: $(STAMP)

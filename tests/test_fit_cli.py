@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.cli import commands as cli
-from layered_brdf_addon.cli.fit_options import DEFAULT_STARTS, start_of
+from layered_brdf_addon.cli.fit_options import DEFAULT_STARTS
+from layered_brdf_addon.cli.fit_request import start_of
 from layered_brdf_addon.cli.fit_outputs import PRESET_FORMAT
 from layered_brdf_addon.cli.fit_targets import column_role, reflectance_rows
 from layered_brdf_addon.cli.requests import request_from_options
@@ -342,16 +343,16 @@ def test_the_start_takes_a_params_file_and_mode_options(tmp_path):
     parser = cli.build_parser()
     ns = parser.parse_args(["fit", "t.json"])
     for kind, (name, modes) in DEFAULT_STARTS.items():
-        params, record = start_of(ns, kind)
+        params, record = start_of(vars(ns), kind)
         assert params == preset(name).replace(**modes) and record["preset"] == name
         assert record["overrides"] == modes
-    assert start_of(ns, "principled")[0].thickness_mode == "height"
+    assert start_of(vars(ns), "principled")[0].thickness_mode == "height"
     ns = parser.parse_args(["fit", "t.json", "--thickness-mode", "noise"])
-    assert start_of(ns, "principled")[0].thickness_mode == "noise"
+    assert start_of(vars(ns), "principled")[0].thickness_mode == "noise"
     (tmp_path / "p.toml").write_text('d_min = 120.0\nd_max = 180.0\noptics = "paper"\n')
     ns = parser.parse_args(["fit", "t.json", "--params", str(tmp_path / "p.toml"), "--lower-medium", "gold",
                             "--optics", "physical", "--accuracy", "rgb"])
-    params, record = start_of(ns, "render")
+    params, record = start_of(vars(ns), "render")
     assert (params.d_min, params.d_max, params.optics, params.lower_medium, params.accuracy) == \
         (120.0, 180.0, "physical", "gold", "rgb")
     assert record["preset"] is None and record["overrides"]["lower_medium"] == "gold"

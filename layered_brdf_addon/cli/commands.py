@@ -18,36 +18,30 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import Any, Collection, Iterable, Sequence
 
 from .. import __version__
 from ..io.staging import FULL_DISK_ERRNOS, WriteError, os_reason, write_error
 from ..model.params import PARAM_SPECS, ParameterError
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
-from .fit_command import cmd_fit
-from .fit_options import add_parser as add_fit_parser
+from ..model.presets import PAPER_PRESETS
+from .batch_request import batch_request_from_options
+from .fit_command import run_fit
+from .fit_request import fit_request_from_options
 from .gallery import render_gallery, summary_rows
 from .gallery import settings_from_options as gallery_settings
 from .input_files import FileValueError
-from .job_files import load_job_file
-from .lookdev import DEFAULT_OUTPUT, render_lookdev
+from .lookdev import render_lookdev
 from .lookdev import settings_from_options as lookdev_settings
-from .option_table import add_options, options_of
-from .option_values import PARAM_NAMES, float_option, int_option, unit_notes
+from .option_table import add_options, names_of, options_of, read_options
+from .option_values import PARAM_NAMES, option_flag, unit_notes
 from .options import (EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK, ArgumentParser, add_param_options,
                       blender_output)
 from .render_job import execute_render
 from .requests import request_from_options, run_options
-from .runner import check_report_target, exit_code, follow_parent, run_batch, write_report
+from .runner import exit_code, follow_parent, run_batch, write_report
 
 PROG = "layered-brdf"
 COMMANDS = ("lookdev", "gallery", "render", "batch", "fit")
-
-
-def _add_scene_options(p: argparse.ArgumentParser, command: str) -> None:
-    add_options(p, command)  # the scene options of the table (.option_table), each with its range
-    p.add_argument("--verbose", action="store_true", help="show Blender's own log")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -64,67 +58,36 @@ def build_parser() -> argparse.ArgumentParser:
                         "Blender's bundled HDRIs and a soft sun, one Cycles render per preset, and compose a "
                         "labelled sheet encoded with the scene's AgX view transform: STEM.png and the sidecar "
                         "STEM.json, written together or not at all.")
-    ld.add_argument("--output", default=None, metavar="PATH", help=f"the sheet (default {DEFAULT_OUTPUT})")
-    add_options(ld, "lookdev")  # --size, --samples, --columns
-    ld.add_argument("--presets", nargs="+", default=None, metavar="NAME",
-                    help="the presets to show (default: every artist preset, then the paper's figures): "
-                    + ", ".join(list(ARTIST_PRESETS) + list(PAPER_PRESETS)))
-    ld.add_argument("--hdri", default=None, metavar="NAME",
-                    help="one of Blender's bundled HDRIs: forest (default), courtyard, studio, city, interior, "
-                    "night, sunrise, sunset")
-    ld.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
-    ld.add_argument("--verbose", action="store_true", help="show Blender's own log")
+    add_options(ld, "lookdev")  # every option of the table (.option_table), each with its range
 
     g = sub.add_parser("gallery", help="the paper's Figs. 3-6 in one labelled contact sheet",
                        description="Render every configuration of the paper's Figs. 3-6 (presets "
                        + ", ".join(PAPER_PRESETS) + ") as spheres in one scene, one render, and compose "
                        "a labelled contact sheet STEM.png, with STEM.exr and the sidecar STEM.json.")
-    g.add_argument("--output", default=None, metavar="PATH", help="the contact sheet (default out/gallery.png)")
-    g.add_argument("--presets", nargs="+", default=None, metavar="NAME",
-                   help="other presets to show instead of the paper's (any of: "
-                   + ", ".join(list(PAPER_PRESETS) + list(ARTIST_PRESETS)) + ")")
-    _add_scene_options(g, "gallery")  # with --size and --columns
+    add_options(g, "gallery")
 
     r = sub.add_parser("render", help="one material on the reference sphere or on an object of a .blend",
                        description="Render one material; write STEM.png (8-bit sRGB: the reference sphere with the "
                        "Standard view transform, a --blend with its scene's view transform, look and exposure), "
                        "STEM.exr (float: beauty, normal, thickness, lower and upper normal) and STEM.json "
                        "(every parameter, camera, sun, timing: enough to predict the pixels).")
-    src = r.add_argument_group("material")
-    src.add_argument("--preset", default=None, metavar="NAME",
-                     help="a named material: " + ", ".join(list(PAPER_PRESETS) + list(ARTIST_PRESETS)))
-    src.add_argument("--params", default=None, metavar="FILE",
-                     help="parameter values from a .json or .toml file (a render's sidecar works too)")
-    scn = r.add_argument_group("scene")
-    scn.add_argument("--blend", default=None, metavar="FILE",
-                     help="render this .blend's camera instead of the reference sphere")
-    scn.add_argument("--object", default=None, metavar="NAME", help="the object of --blend that gets the material")
-    scn.add_argument("--resolution", default=None, metavar="N|WxH",
-                     help="image size (reference sphere: default 128; .blend: default the file's)")
-    _add_scene_options(scn, "render")
-    out = r.add_argument_group("output")
-    out.add_argument("--output", default=None, metavar="PATH",
-                     help="output stem: writes PATH.png, PATH.exr, PATH.json (default out/PRESET)")
-    out.add_argument("--name", default=None, metavar="TEXT", help="a name recorded in the sidecar")
+    add_options(r, "render")
     add_param_options(r)
 
     b = sub.add_parser("batch", help="render the jobs of a TOML or JSON job file",
                        description="Render every job of JOBFILE, each in a fresh subprocess. A job has the "
                        "options of 'render' (e.g. preset = \"fig4_tilted\", d_min = 80, samples = 4). "
                        "Failing jobs are reported; the others still run; the exit code is 1 if any failed.")
-    b.add_argument("jobfile", metavar="JOBFILE", help="a .toml ([defaults] and [[job]] tables) or .json file")
-    b.add_argument("--jobs", default="1", metavar="N",
-                   help="parallel jobs on a local Dask cluster of N single-threaded workers (default 1: serial)")
-    b.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run the jobs as tasks on a Dask scheduler's workers, e.g. tcp://host:8786")
-    b.add_argument("--output-dir", dest="output_dir", default=None, metavar="DIR",
-                   help="folder of relative job outputs (default out/batch); other paths in a job are "
-                   "relative to the job file")
-    b.add_argument("--timeout", default=None, metavar="SECONDS", help="stop a job after this long")
-    b.add_argument("--report", default=None, metavar="FILE.json", help="also write the results as JSON")
-    b.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    add_options(b, "batch")
 
-    add_fit_parser(sub)
+    f = sub.add_parser(
+        "fit", help="fit a layered material to a render, a reflectance table or a Principled BSDF material",
+        description="Fit the parameters of a layered material to a target: a reference-sphere render "
+        "(TARGET), a film's mirror reflectance (--reflectance) or a Principled BSDF material rendered on the "
+        "reference sphere (--principled).  Writes OUT.json (the parameters, a user preset of the panel that "
+        "'render --params' reads too, with a record of the fit) and OUT.png (target, fit and their CIEDE2000 "
+        "difference), together and only once the fit is done.")
+    add_options(f, "fit")
     return parser
 
 
@@ -158,11 +121,6 @@ def _numeric(s: str) -> bool:
 
 
 # ---------------------------------------------------------------------------
-def _table_names(command: str) -> tuple[str, ...]:
-    """The names of ``command``'s options that the option table declares."""
-    return tuple(spec.name for spec in options_of(command))
-
-
 def _options(ns: argparse.Namespace, names: Sequence[str]) -> dict[str, Any]:
     return {n: getattr(ns, n) for n in names if getattr(ns, n, None) is not None}
 
@@ -170,6 +128,8 @@ def _options(ns: argparse.Namespace, names: Sequence[str]) -> dict[str, Any]:
 def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``render``: validate, then render one request in this process."""
     follow_parent()
+    own = _options(ns, tuple(n for n in names_of("render") if n not in run_options()))
+    read_options("render", own)  # the command's own options (--verbose...); a job holds the others
     req = request_from_options(_options(ns, run_options() + PARAM_NAMES))
     for note in unit_notes(dict(req.overrides)):
         print(f"{PROG}: note: {note}", file=sys.stderr)
@@ -184,7 +144,7 @@ def cmd_render(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``gallery``: render the paper's configurations into one labelled contact sheet."""
-    s = gallery_settings(_options(ns, ("output", "presets") + _table_names("gallery")))
+    s = gallery_settings(_options(ns, names_of("gallery")))
     with blender_output(ns.verbose):
         res = render_gallery(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv])
     headers, rows = summary_rows(res)
@@ -198,7 +158,7 @@ def cmd_gallery(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_lookdev(ns: argparse.Namespace, argv: Sequence[str]) -> int:
     """``lookdev``: every preset on the shader ball, one labelled sheet."""
-    s = lookdev_settings(_options(ns, ("output", "presets", "hdri") + _table_names("lookdev")))
+    s = lookdev_settings(_options(ns, names_of("lookdev")))
     with blender_output(ns.verbose):
         res = render_lookdev(s, command=[sys.executable, "-m", "layered_brdf_addon", *argv], progress=ns.progress)
     rows = [[t["name"], t["label"][0], f"{t['render_seconds']:.1f}"] for t in res.tiles]
@@ -212,13 +172,9 @@ def cmd_lookdev(ns: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def cmd_batch(ns: argparse.Namespace) -> int:
     """``batch``: run the jobs of a job file and print a summary table."""
-    n_jobs = int_option("jobs", ns.jobs, 1, 4096)
-    if ns.scheduler is not None and n_jobs > 1:
-        raise ParameterError("jobs", n_jobs, "1 with --scheduler (the cluster's workers set the parallelism)")
-    timeout = float_option("timeout", ns.timeout, 1.0, 1e7) if ns.timeout is not None else None
-    report = check_report_target(ns.report) if ns.report else None
-    jobs = load_job_file(ns.jobfile, output_dir=ns.output_dir or Path("out") / "batch", report=report)
-    results = run_batch(jobs, n_jobs=n_jobs, scheduler=ns.scheduler, timeout=timeout, progress=ns.progress)
+    req = batch_request_from_options(_options(ns, names_of("batch")))
+    results = run_batch(req.jobs, n_jobs=req.n_jobs, scheduler=req.scheduler, timeout=req.timeout,
+                        progress=req.progress)
     rows = []
     for r in results:
         if r.ok:
@@ -230,17 +186,16 @@ def cmd_batch(ns: argparse.Namespace) -> int:
     print(format_table(["job", "status", "seconds", "outputs / error"], rows))
     failed = sum(not r.ok for r in results)
     print(f"\n{len(results) - failed} of {len(results)} jobs rendered" + (f", {failed} failed" if failed else ""))
-    if report is not None:
+    if req.report is not None:
         try:
-            write_report(report, {"jobfile": str(Path(ns.jobfile).absolute()),
-                                  "results": [r.to_dict() for r in results]})
+            write_report(req.report, {"jobfile": str(req.jobfile), "results": [r.to_dict() for r in results]})
         except OSError as e:
-            print(f"{PROG}: error: could not write --report {report}: {os_reason(e)}", file=sys.stderr)
+            print(f"{PROG}: error: could not write --report {req.report}: {os_reason(e)}", file=sys.stderr)
             return EXIT_FAILED
     return exit_code(results)
 
 
-def _hint(e: ParameterError, options: Collection[str]) -> str:
+def _hint(e: ParameterError, command: str, options: Collection[str]) -> str:
     """`` (option --NAME)`` after the message of a value given on the command line.
 
     Only for an option of the command that runs (``options``: its dests): a job file's
@@ -249,12 +204,10 @@ def _hint(e: ParameterError, options: Collection[str]) -> str:
     """
     if isinstance(e, FileValueError) or e.name not in options:
         return ""
-    if any(s.name == e.name for s in PARAM_SPECS) or e.name in ("sun_strength", "output", "resolution", "size",
-                                                                  "samples", "presets", "hdri", "columns", "object",
-                                                                  "vary", "starts", "start", "tile", "material",
-                                                                  "reflectance", "principled"):
-        return f" (option --{e.name.replace('_', '-')})"
-    return ""
+    for spec in options_of(command):
+        if spec.name == e.name:
+            return f" (option {spec.flag})" if not spec.positional else f" (argument {spec.flag})"
+    return f" (option {option_flag(e.name)})" if any(s.name == e.name for s in PARAM_SPECS) else ""
 
 
 def _write_failed(e: Exception) -> int:
@@ -294,10 +247,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if ns.command == "gallery":
             return cmd_gallery(ns, argv)
         if ns.command == "fit":
-            return cmd_fit(ns, argv)
+            return run_fit(fit_request_from_options(_options(ns, names_of("fit"))), argv)
         return cmd_lookdev(ns, argv)
     except ParameterError as e:
-        print(f"{PROG}: error: {e}{_hint(e, vars(ns))}", file=sys.stderr)
+        print(f"{PROG}: error: {e}{_hint(e, ns.command, vars(ns))}", file=sys.stderr)
         return EXIT_INVALID
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; no partial output was left", file=sys.stderr)

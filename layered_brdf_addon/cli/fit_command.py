@@ -10,7 +10,8 @@ A target is one of:
 * a Principled BSDF material of a .blend (``--principled FILE.blend --material NAME``),
   rendered by Cycles on the reference sphere under a few suns.
 
-The fit (:func:`layered_brdf_addon.fit.solve.fit`) runs in numpy from a start (a preset, a
+The options are validated into a :class:`~.fit_request.FitRequest` first; the fit
+(:func:`layered_brdf_addon.fit.solve.fit`) runs in numpy from its start (a preset, a
 params file, their modes overridden by options) and writes, together and only once it is
 done:
 
@@ -27,20 +28,17 @@ imports bpy except the ``--principled`` path.
 """
 from __future__ import annotations
 
-import argparse
 import sys
 from typing import Callable, Sequence
 
 from ..fit import solve
-from ..fit.free import check_vary, default_vary, film_vary
+from ..fit.free import default_vary, film_vary
 from ..fit.solve import FitCancelled
 from ..io.staging import InterruptGuard
 from ..model.params import LayeredParams
-from .fit_options import STARTS_RANGE, start_of
-from .fit_outputs import (check_output, default_output, fit_record, output_document, reflectance_figure,
-                          sphere_figure, write_outputs)
-from .fit_targets import load_principled_target, load_reflectance_target, load_render_target, source_of
-from .option_values import int_option
+from .fit_outputs import fit_record, output_document, reflectance_figure, sphere_figure, write_outputs
+from .fit_request import FitRequest
+from .fit_targets import load_principled_target, load_reflectance_target, load_render_target
 from .options import EXIT_OK
 
 STEPS_PER_START = 40  # the optimiser's steps from each start
@@ -71,33 +69,27 @@ def fit_with_progress(target, start: LayeredParams, vary, starts: int, enabled: 
     return result
 
 
-def cmd_fit(ns: argparse.Namespace, argv: Sequence[str] | None = None) -> int:
-    """``fit``: validate everything, read (or render) the target, fit, write OUT.json and OUT.png."""
-    source = source_of(ns)
-    start, start_record = start_of(ns, source.kind)
-    vary = check_vary(ns.vary) if ns.vary is not None else None
-    starts = int_option("starts", ns.starts, *STARTS_RANGE) if ns.starts is not None else 3
-    inputs = list(source.inputs)
-    if start_record["params_file"] is not None:
-        inputs.append(("the params file", start_record["params_file"]))
-    paths = check_output(ns.output if ns.output is not None else default_output(source), inputs)
+def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
+    """``fit``: read (or render) the validated request's target, fit, write OUT.json and OUT.png."""
+    source, paths = req.source, req.paths
     with InterruptGuard() as guard:
         if source.kind == "render":
-            loaded = load_render_target(source, ns.tile)
+            loaded = load_render_target(source, req.tile)
         elif source.kind == "reflectance":
             loaded = load_reflectance_target(source)
         else:
-            loaded = load_principled_target(source, ns, guard)
+            loaded = load_principled_target(source, req.principled, guard, verbose=req.verbose)
         guard.check()
         try:
-            result = fit_with_progress(loaded.target, start, vary, starts, ns.progress,
+            result = fit_with_progress(loaded.target, req.start, req.vary, req.starts, req.progress,
                                        should_stop=lambda: guard.received is not None)
         except FitCancelled:
             raise KeyboardInterrupt("the fit was interrupted") from None
         guard.check()
         draw = reflectance_figure if source.kind == "reflectance" else sphere_figure
         figure = draw(loaded.target, result.params, result.mean_delta_e)
-        document = output_document(paths.stem.name, result.params, fit_record(result, loaded, start_record, argv))
+        document = output_document(paths.stem.name, result.params,
+                                   fit_record(result, loaded, dict(req.start_record), argv))
         write_outputs(paths, document, figure, guard)
     print(f"fit: mean CIEDE2000 {result.mean_delta_e:.3f}, {result.seconds:.1f} s, {result.evaluations} "
           f"evaluations; wrote {paths.json}, {paths.png}")

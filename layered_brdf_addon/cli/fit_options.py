@@ -1,19 +1,19 @@
-"""The options of ``layered-brdf fit`` and the start they name.
+"""The options of ``layered-brdf fit``, declared once (:class:`~.option_spec.OptionSpec`, joined to the
+command line's table by :mod:`.option_table`): its target, the start and the free parameters, its output.
+The start's defaults by the target's kind and the ranges of the Principled BSDF target's renders live here.
 
-:func:`add_parser` adds the sub-command (its target, start, free parameters and output);
-:func:`start_of` makes the parameters the fit starts from out of ``--start``, ``--params``
-and the mode options.
+Nothing here imports bpy.
 """
 from __future__ import annotations
 
-import argparse
 from typing import Any
 
-from ..model.params import PARAM_SPECS, LayeredParams, ParameterError
-from ..model.presets import PRESETS, preset
-from .fit_targets import PRINCIPLED_HDRIS, PRINCIPLED_SAMPLES, PRINCIPLED_SAMPLING, PRINCIPLED_SIZE, PRINCIPLED_SIZES
-from .input_files import file_label, from_file, load_params_file, merged_values
-from .option_values import option_flag, path_option, shown
+from ..fit.environment import DEFAULT_HDRIS
+from ..fit.free import CONTINUOUS, check_vary
+from ..model.params import PARAM_SPECS, ParameterError
+from ..model.presets import PRESETS
+from .option_spec import OptionSpec, as_given, ints, preset_name
+from .option_values import check_plain, shown
 from .options import param_metavar
 
 # The start when neither --start nor --params is given, by the target's kind: the preset whose
@@ -24,68 +24,24 @@ DEFAULT_STARTS = {"render": ("soap_bubble", {}), "principled": ("glazed_clay", {
                   "reflectance": ("anodised_titanium", {})}
 # The start's modes an option may override (the options of ``render`` for them).
 MODE_OPTIONS = ("thickness_mode", "normal_mode", "optics", "lower_medium", "base_layer", "accuracy")
-STARTS_RANGE = (1, 10)
+STARTS_RANGE, STARTS_DEFAULT = (1, 10), 3
+PRINCIPLED_SIZE, PRINCIPLED_SIZES = 96, (8, 4096)  # pixels of each render
+PRINCIPLED_SAMPLES, PRINCIPLED_SAMPLING = 1, (1, 65536)  # samples per pixel
+PRINCIPLED_HDRIS = DEFAULT_HDRIS
 
-
-def add_parser(sub) -> argparse.ArgumentParser:
-    """The ``fit`` sub-command of ``sub`` (the parser's sub-parsers)."""
-
-    f = sub.add_parser(
-        "fit", help="fit a layered material to a render, a reflectance table or a Principled BSDF material",
-        description="Fit the parameters of a layered material to a target: a reference-sphere render "
-        "(TARGET), a film's mirror reflectance (--reflectance) or a Principled BSDF material rendered on the "
-        "reference sphere (--principled).  Writes OUT.json (the parameters, a user preset of the panel that "
-        "'render --params' reads too, with a record of the fit) and OUT.png (target, fit and their CIEDE2000 "
-        "difference), together and only once the fit is done.")
-    tgt = f.add_argument_group("target (exactly one)")
-    tgt.add_argument("target", nargs="?", default=None, metavar="TARGET",
-                     help="a reference-sphere render: its sidecar STEM.json, or STEM, STEM.exr or STEM.png "
-                     "(the sidecar and the EXR beside it); the EXR's Combined pass is fitted")
-    tgt.add_argument("--tile", default=None, metavar="NAME|INDEX",
-                     help="the sphere of a gallery render to fit: its preset name or its index from 0")
-    tgt.add_argument("--reflectance", default=None, metavar="FILE.csv",
-                     help="a film's mirror reflectance: a CSV whose header names angle (degrees), wavelength "
-                     "(nm) or channel (r, g, b) and reflectance (0-1); e.g. 'angle_deg,wavelength_nm,reflectance'")
-    tgt.add_argument("--principled", default=None, metavar="FILE.blend",
-                     help="a .blend holding the Principled BSDF material --material, rendered by Cycles on the "
-                     "reference sphere under three suns")
-    tgt.add_argument("--material", default=None, metavar="NAME", help="the material of --principled")
-    tgt.add_argument("--size", default=None, metavar="PX",
-                     help=f"--principled: pixels of each render, an integer in [{PRINCIPLED_SIZES[0]}, "
-                     f"{PRINCIPLED_SIZES[1]}] (default {PRINCIPLED_SIZE})")
-    tgt.add_argument("--samples", default=None, metavar="N",
-                     help=f"--principled: samples per pixel, an integer in [{PRINCIPLED_SAMPLING[0]}, "
-                     f"{PRINCIPLED_SAMPLING[1]}] (default {PRINCIPLED_SAMPLES}, exact under a sun)")
-    tgt.add_argument("--hdri", nargs="+", default=None, metavar="NAME",
-                     help="--principled: Blender's bundled HDRIs the material is also rendered under and fitted "
-                          f"to (default {' '.join(PRINCIPLED_HDRIS)}; 'none': the suns only)")
-    st = f.add_argument_group("start and free parameters")
-    st.add_argument("--start", default=None, metavar="PRESET",
-                    help="the preset the fit starts from, whose modes (optics, lower medium, normals, thickness "
-                    "pattern) it keeps: they decide what the fit can reach, so choose the preset of the target's "
-                    f"kind of material. Default: {DEFAULT_STARTS['render'][0]} for TARGET, "
-                    f"{DEFAULT_STARTS['principled'][0]} with --thickness-mode height for --principled, "
-                    f"{DEFAULT_STARTS['reflectance'][0]} for --reflectance (the presets that came closest on test "
-                    "targets of each kind). One of " + ", ".join(PRESETS))
-    st.add_argument("--params", default=None, metavar="FILE",
-                    help="start from the parameter values of a .json or .toml file (a render's sidecar or an "
-                    "earlier fit's OUT.json work too), over --start when given")
-    st.add_argument("--vary", nargs="+", default=None, metavar="NAME",
-                    help="the parameters the fit may change (default: the continuous parameters the start's "
-                    "modes use; for --reflectance the layer's indices and thickness)")
-    st.add_argument("--starts", default=None, metavar="N",
-                    help=f"thickness orders tried besides the start, an integer in [{STARTS_RANGE[0]}, "
-                    f"{STARTS_RANGE[1]}] (default 3)")
-    for spec in PARAM_SPECS:
-        if spec.name in MODE_OPTIONS:
-            st.add_argument(option_flag(spec.name), dest=spec.name, choices=spec.options, default=None,
-                            metavar=param_metavar(spec), help=mode_help(spec))
-    out = f.add_argument_group("output")
-    out.add_argument("--output", default=None, metavar="OUT",
-                     help="output stem: writes OUT.json and OUT.png (default out/NAME-fit, NAME the target's)")
-    out.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
-    out.add_argument("--verbose", action="store_true", help="--principled: show Blender's own log")
-    return f
+TARGET_ALLOWED = ("a reference-sphere render of 'layered-brdf render': its sidecar STEM.json, or STEM, "
+                  "STEM.exr or STEM.png with the sidecar and the EXR beside it")
+SOURCE_ALLOWED = ("exactly one target: TARGET (a render's sidecar), --reflectance FILE.csv or "
+                  "--principled FILE.blend")
+REFLECTANCE_ALLOWED = ("a readable CSV file (at most 1 MiB) whose header names the columns angle (degrees from "
+                       "the normal, in [0, 90)), wavelength (nm) or channel (r, g, b), and reflectance (a "
+                       "fraction in [0, 1]), one row per angle and wavelength or channel")
+TILE_ALLOWED = "a tile of a gallery render, by its name or index; no value for a reference render"
+MATERIAL_ALLOWED = "the name of a material of the .blend holding a Principled BSDF (with --principled)"
+HDRIS_ALLOWED = "names of Blender's bundled HDRIs (forest, courtyard, ...), or 'none' (the suns only)"
+OUTPUT_ALLOWED = "a file path stem in a writable folder (STEM.json and STEM.png are written)"
+TARGET, START = "target (exactly one)", "start and free parameters"  # fit's own sections of --help
+OUTPUT = "output"
 
 
 def mode_help(spec) -> str:
@@ -93,30 +49,70 @@ def mode_help(spec) -> str:
     text = f"the start's {spec.label.lower()}, instead of its own: {spec.description}"
     if spec.name == "thickness_mode":
         text += "; a noise is fitted through the colours' statistics, a height pixel by pixel"
-    return text.replace("%", "%%")
+    return text
 
 
-# ---------------------------------------------------------------------------
-# the start
-def start_of(ns: argparse.Namespace, kind: str) -> tuple[LayeredParams, dict[str, Any]]:
-    """The parameters the fit starts from, and the record of where they came from: ``--start``
-    (default :data:`DEFAULT_STARTS` by the target's kind; none with only ``--params``), a
-    ``--params`` file over it, the mode options over both."""
-    name, defaults = ns.start, {}
-    if name is not None and name not in PRESETS:
-        raise ParameterError("start", shown(name), "one of " + ", ".join(PRESETS))
-    if name is None and ns.params is None:
-        name, defaults = DEFAULT_STARTS[kind]
-    params = preset(name) if name is not None else LayeredParams()
-    file_values, label, params_file = {}, "", None
-    if ns.params is not None:
-        params_file = path_option("params", ns.params,
-                                  "the path of a .json or .toml file of parameter values").absolute()
-        label = file_label(ns.params)
-        file_values = load_params_file(params_file, label)
-    overrides = {**defaults, **{k: getattr(ns, k) for k in MODE_OPTIONS if getattr(ns, k, None) is not None}}
-    try:
-        params = LayeredParams.from_dict(merged_values(file_values, overrides), base=params)
-    except ParameterError as e:
-        raise from_file(e, file_values, label, overridden=overrides) from None
-    return params, {"preset": name, "params_file": params_file, "overrides": overrides}
+def _hdri_names(name: str, value: Any) -> tuple[str, ...]:
+    """HDRI names (checked against Blender's when it is loaded), or ``('none',)`` alone."""
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, (list, tuple)) or not names or not all(isinstance(n, str) and n.strip() and "/" not in n
+                                                                       for n in names):
+        raise ParameterError(name, shown(value), HDRIS_ALLOWED)
+    if "none" in names and len(names) > 1:
+        raise ParameterError(name, shown(value), HDRIS_ALLOWED + " ('none' alone)")
+    return tuple(check_plain(name, n) for n in names)
+
+
+def _mode(spec):
+    def read(name: str, value: Any) -> str:
+        if value not in spec.options:
+            raise ParameterError(name, shown(value), spec.allowed)
+        return value
+    return read
+
+
+FIT_OPTIONS = (
+    OptionSpec("target", "a reference-sphere render, fitted through its EXR's Combined pass", TARGET_ALLOWED,
+               as_given, ("fit",), metavar="TARGET", nargs="?", positional=True, group=TARGET, job=False),
+    OptionSpec("tile", "the sphere of a gallery render to fit", TILE_ALLOWED, as_given,
+               ("fit",), metavar="NAME|INDEX", group=TARGET, job=False, goes_with="target"),
+    OptionSpec("reflectance", "a film's mirror reflectance; e.g. a header 'angle_deg,wavelength_nm,reflectance'",
+               REFLECTANCE_ALLOWED, as_given, ("fit",), metavar="FILE.csv", group=TARGET, job=False),
+    OptionSpec("principled", "a .blend holding the Principled BSDF material --material, rendered by Cycles on the "
+               "reference sphere under three suns", "the path of a .blend file", as_given, ("fit",),
+               metavar="FILE.blend", group=TARGET, job=False),
+    OptionSpec("material", "the material of --principled", MATERIAL_ALLOWED, as_given, ("fit",), metavar="NAME",
+               group=TARGET, job=False, goes_with="principled"),
+    OptionSpec("size", "--principled: pixels of each render", f"an integer in [{PRINCIPLED_SIZES[0]}, "
+               f"{PRINCIPLED_SIZES[1]}]", ints(*PRINCIPLED_SIZES), ("fit",), defaults={"fit": str(PRINCIPLED_SIZE)},
+               metavar="PX", group=TARGET, job=False, goes_with="principled"),
+    OptionSpec("samples", "--principled: samples per pixel", f"an integer in [{PRINCIPLED_SAMPLING[0]}, "
+               f"{PRINCIPLED_SAMPLING[1]}]", ints(*PRINCIPLED_SAMPLING), ("fit",),
+               defaults={"fit": f"{PRINCIPLED_SAMPLES}, exact under a sun"}, group=TARGET, job=False,
+               goes_with="principled"),
+    OptionSpec("hdri", "--principled: Blender's bundled HDRIs the material is also rendered under and fitted to",
+               HDRIS_ALLOWED, _hdri_names, ("fit",), defaults={"fit": " ".join(PRINCIPLED_HDRIS)}, metavar="NAME",
+               nargs="+", group=TARGET, job=False, goes_with="principled"),
+    OptionSpec("start", "the preset the fit starts from, whose modes (optics, lower medium, normals, thickness "
+               "pattern) it keeps: they decide what the fit can reach, so choose the preset of the target's kind of "
+               "material", "one of " + ", ".join(sorted(PRESETS)), preset_name, ("fit",),
+               defaults={"fit": f"{DEFAULT_STARTS['render'][0]} for TARGET, {DEFAULT_STARTS['principled'][0]} with "
+                         f"--thickness-mode height for --principled, {DEFAULT_STARTS['reflectance'][0]} for "
+                         "--reflectance: the presets that came closest on test targets of each kind"},
+               metavar="PRESET", group=START, job=False),
+    OptionSpec("params", "start from the parameter values of a file (a render's sidecar or an earlier fit's "
+               "OUT.json work too), over --start when given", "the path of a .json or .toml file of parameter "
+               "values", as_given, ("fit",), metavar="FILE", group=START, job=False),
+    OptionSpec("vary", "the parameters the fit may change", "names of continuous parameters: "
+               + ", ".join(CONTINUOUS), lambda name, value: check_vary([value] if isinstance(value, str) else value),
+               ("fit",), defaults={"fit": "the continuous parameters the start's modes use; for --reflectance the "
+                                   "layer's indices and thickness"}, metavar="NAME", nargs="+", group=START,
+               job=False),
+    OptionSpec("starts", "thickness orders tried besides the start", f"an integer in [{STARTS_RANGE[0]}, "
+               f"{STARTS_RANGE[1]}]", ints(*STARTS_RANGE), ("fit",), defaults={"fit": str(STARTS_DEFAULT)},
+               group=START, job=False),
+    *(OptionSpec(spec.name, mode_help(spec), spec.allowed, _mode(spec), ("fit",), metavar=param_metavar(spec),
+                 choices=spec.options, group=START, job=False) for spec in PARAM_SPECS if spec.name in MODE_OPTIONS),
+    OptionSpec("output", "output stem: writes OUT.json and OUT.png", OUTPUT_ALLOWED, as_given, ("fit",),
+               defaults={"fit": "out/NAME-fit, NAME the target's"}, metavar="OUT", group=OUTPUT, job=False),
+)

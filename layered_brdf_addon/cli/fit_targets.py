@@ -1,50 +1,33 @@
-"""The target of ``layered-brdf fit``: which one the options name and reading it.
+"""The target of ``layered-brdf fit``: reading it.
 
-:func:`source_of` says which target the options name (a reference-sphere render, a
-reflectance table or a Principled BSDF material) before anything is read; the loaders read
+A :class:`Source` is the target the options name (a reference-sphere render, a reflectance table or a
+Principled BSDF material: :func:`.fit_request.source_of`), before anything is read; the loaders read
 it into a target of :mod:`layered_brdf_addon.fit.targets` with the record of it that
 ``OUT.json`` keeps, or raise :class:`ParameterError` naming the option when it cannot be
 fitted.  Only :func:`load_principled_target` imports bpy (it renders the material).
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from ..blender import tempdirs
-from ..fit.environment import DEFAULT_HDRIS
 from ..fit.targets import ReflectanceTarget, SphereTarget, SphereView
 from ..fit.targets import TargetError as FitTargetError
 from ..io.codecs import exr_beauty, muted_stderr, read_complete_exr_layers
-from ..io.sidecar import SIDECAR_FORMAT, scene_from_sidecar
-from ..io.staging import OutputPaths, output_stem
+from ..io.sidecar import SidecarError
+from ..io.sphere_render import read_sphere_render
 from ..model.params import ParameterError
-from ..model.sphere import sphere_geometry
-from .input_files import MAX_INPUT_BYTES, check_blend_file, file_label, read_regular_file, read_table_file
-from .option_values import int_option, path_option, shown
+from .fit_options import REFLECTANCE_ALLOWED, TARGET_ALLOWED, TILE_ALLOWED
+from .input_files import MAX_INPUT_BYTES, check_blend_file, file_label, read_regular_file
+from .option_values import shown
 from .options import blender_output
-
-PRINCIPLED_SIZE = 96
-PRINCIPLED_SIZES = (8, 4096)  # pixels of each render
-PRINCIPLED_SAMPLING = (1, 65536)  # samples per pixel
-PRINCIPLED_SAMPLES = 1
-PRINCIPLED_HDRIS = DEFAULT_HDRIS
-
-TARGET_ALLOWED = ("a reference-sphere render of 'layered-brdf render': its sidecar STEM.json, or STEM, "
-                  "STEM.exr or STEM.png with the sidecar and the EXR beside it")
-SOURCE_ALLOWED = ("exactly one target: TARGET (a render's sidecar), --reflectance FILE.csv or "
-                  "--principled FILE.blend")
-REFLECTANCE_ALLOWED = ("a readable CSV file (at most 1 MiB) whose header names the columns angle (degrees from "
-                       "the normal, in [0, 90)), wavelength (nm) or channel (r, g, b), and reflectance (a "
-                       "fraction in [0, 1]), one row per angle and wavelength or channel")
-
 
 # ---------------------------------------------------------------------------
 # the target
@@ -66,121 +49,35 @@ class LoadedTarget:
     record: dict[str, Any]
 
 
-def source_of(ns: argparse.Namespace) -> Source:
-    """The target the options name; :class:`ParameterError` unless exactly one is named and
-    the options that go with it are given with it only."""
-    given = [k for k in ("target", "reflectance", "principled") if getattr(ns, k) is not None]
-    if len(given) != 1:
-        raise ParameterError("target", shown([getattr(ns, k) for k in given]) if given else None, SOURCE_ALLOWED)
-    kind = given[0]
-    if ns.tile is not None and kind != "target":
-        raise ParameterError("tile", ns.tile, "no value without TARGET (a gallery render's sphere)")
-    if kind != "principled":
-        for name in ("material", "size", "samples", "hdri"):
-            if getattr(ns, name) is not None:
-                raise ParameterError(name, getattr(ns, name), "no value without --principled")
-    if kind == "target":
-        return _render_source(ns.target)
-    if kind == "reflectance":
-        p = path_option("reflectance", ns.reflectance, REFLECTANCE_ALLOWED)
-        return Source("reflectance", p, p.stem, [("the reflectance table", p)])
-    p = path_option("principled", ns.principled, "the path of a .blend file")
-    if not isinstance(ns.material, str) or not ns.material.strip():
-        raise ParameterError("material", ns.material, "the name of a material of the .blend holding a "
-                             "Principled BSDF (with --principled)")
-    return Source("principled", p, ns.material, [("the .blend", p)])
-
-
-def _render_source(value: Any) -> Source:
-    p = path_option("target", value, TARGET_ALLOWED)
-    side = p if p.suffix.lower() == ".json" else OutputPaths(output_stem(p)).json
-    paths = OutputPaths(side.with_suffix(""))
-    return Source("render", side, paths.stem.name,
-                  [("the target's sidecar", paths.json), ("the target's EXR", paths.exr),
-                   ("the target's PNG", paths.png)])
-
-
-SCENE_REFUSALS = {
-    "blend": "a render of a .blend (--blend), whose geometry and lights numpy does not know",
-    "lookdev": "a look-dev sheet (a shader ball under an HDRI)",
-}
-
-
 def load_render_target(source: Source, tile: Any) -> LoadedTarget:
     """The EXR's Combined pass of a reference-sphere render (or one sphere of a gallery), seen
-    by the sidecar's camera under its sun; :class:`ParameterError` naming ``target`` (or
-    ``tile``) when it cannot be fitted."""
+    by the sidecar's camera under its sun (:func:`..io.sphere_render.read_sphere_render`);
+    :class:`ParameterError` naming ``target`` (or ``tile``) with the reason when it cannot be
+    fitted."""
     label = file_label(source.path)
-    data = read_table_file(source.path, "target", TARGET_ALLOWED)
-
-    def refuse(why: str) -> ParameterError:
-        return ParameterError("target", label, f"{TARGET_ALLOWED} ({why})")
-
-    if not isinstance(data, dict) or data.get("format") != SIDECAR_FORMAT:
-        raise refuse(f"{label} is not the sidecar of a layered-brdf render")
-    kind = data.get("scene")
-    if kind not in ("reference", "gallery"):
-        what = SCENE_REFUSALS.get(kind, f"a sidecar of scene {shown(kind)!r}")
-        raise refuse(f"only reference-sphere renders can be reproduced in numpy; this is {what}")
     try:
-        scene = scene_from_sidecar(data)
-    except (KeyError, TypeError, ValueError, ParameterError) as e:
-        raise refuse(f"its camera, sun or spheres cannot be read: {e}") from None
-    sphere, tile_name = _sphere_of(data, tile, len(scene.centers))
-    exr = OutputPaths(source.path.with_suffix("")).exr
-    rgb = _read_beauty(exr, refuse)
-    w, h = scene.camera.width, scene.camera.height
-    if rgb.shape[:2] != (h, w):
-        raise refuse(f"its EXR is {rgb.shape[1]}x{rgb.shape[0]} pixels where the sidecar's camera renders {w}x{h}")
-    view = SphereView(rgb, scene.camera, scene.sun, scene.centers, sphere)
-    _check_finite(view, refuse)
+        render = read_sphere_render(source.path, read_complete_beauty, tile=tile)
+    except SidecarError as e:
+        if e.field == "tile":
+            raise ParameterError("tile", shown(tile), f"{TILE_ALLOWED} ({e.reason})") from None
+        raise ParameterError("target", label, f"{TARGET_ALLOWED} ({e.reason})") from None
+    scene = render.scene
+    view = SphereView(render.image, scene.camera, scene.sun, scene.centers, render.sphere)
     try:
         target = SphereTarget([view])
     except FitTargetError as e:
-        raise refuse(str(e)) from None
-    record = {"kind": "render", "sidecar": source.path.absolute(), "exr": exr.absolute(), "scene": kind,
-              "tile": tile_name, "size": [w, h], "pixels": int(len(target.observed))}
+        raise ParameterError("target", label, f"{TARGET_ALLOWED} ({e})") from None
+    record = {"kind": "render", "sidecar": source.path.absolute(), "exr": render.exr_path.absolute(),
+              "scene": render.kind, "tile": render.tile, "size": [scene.camera.width, scene.camera.height],
+              "pixels": int(len(target.observed))}
     return LoadedTarget(target, record)
 
 
-def _sphere_of(data: dict, tile: Any, count: int) -> tuple[int, str | None]:
-    """The index of the sphere to fit, and its tile's name in a gallery."""
-    if data.get("scene") == "reference":
-        if tile is not None:
-            raise ParameterError("tile", tile, "no value for a reference render (it holds one sphere)")
-        return 0, None
-    names = [t.get("name") if isinstance(t, dict) else None for t in data.get("tiles", [])]
-    allowed = f"a tile of the gallery: a name among {', '.join(map(str, names))} or an index in [0, {count - 1}]"
-    if tile is None:
-        raise ParameterError("tile", None, allowed + " (a gallery holds several spheres: --tile chooses one)")
-    if tile in names:
-        return names.index(tile), tile
-    try:
-        k = int(tile)
-    except (TypeError, ValueError):
-        raise ParameterError("tile", shown(tile), allowed) from None
-    if not 0 <= k < min(count, len(names) or count):
-        raise ParameterError("tile", shown(tile), allowed)
-    return k, names[k] if k < len(names) else None
-
-
-def _read_beauty(exr: Path, refuse: Callable[[str], ParameterError]) -> np.ndarray:
-    if not exr.is_file():
-        raise refuse(f"its EXR {file_label(exr)} is missing: the target image is the EXR's Combined pass")
-    try:
-        with muted_stderr():
-            rgb, _ = exr_beauty(exr, read_complete_exr_layers(exr))
-    except Exception as e:
-        raise refuse(f"its EXR {file_label(exr)} cannot be read: {e.__class__.__name__}: {e}") from None
-    return rgb
-
-
-def _check_finite(view, refuse: Callable[[str], ParameterError]) -> None:
-    geo = sphere_geometry(view.camera, view.centers)
-    pixels = np.asarray(view.image)[geo.sphere == view.sphere][:, :3]
-    bad = int(np.count_nonzero(~np.all(np.isfinite(pixels), axis=-1)))
-    if bad:
-        raise refuse(f"{bad} of the sphere's {len(pixels)} pixels in its EXR are NaN or infinite")
+def read_complete_beauty(exr: Path) -> np.ndarray:
+    """The Combined pass (H, W, 3) of an EXR that holds every part its header lists (a file cut
+    short is refused, not read as one with fewer passes); OpenEXR's complaints are not printed."""
+    with muted_stderr():
+        return exr_beauty(exr, read_complete_exr_layers(exr))[0]
 
 
 # --- reflectance tables ----------------------------------------------------
@@ -264,12 +161,11 @@ def load_reflectance_target(source: Source) -> LoadedTarget:
 
 
 # --- Principled BSDF materials ---------------------------------------------
-def load_principled_target(source: Source, ns: argparse.Namespace, guard) -> LoadedTarget:
+def load_principled_target(source: Source, renders, guard, *, verbose: bool = False) -> LoadedTarget:
     """The Principled BSDF material ``--material`` of the .blend, rendered by Cycles on the
-    reference sphere (:func:`layered_brdf_addon.blender.principled_target.principled_views`)."""
-    size = int_option("size", ns.size, *PRINCIPLED_SIZES) if ns.size is not None else PRINCIPLED_SIZE
-    samples = int_option("samples", ns.samples, *PRINCIPLED_SAMPLING) if ns.samples is not None else PRINCIPLED_SAMPLES
-    hdri_names = list(PRINCIPLED_HDRIS) if ns.hdri is None else [] if ns.hdri == ["none"] else list(ns.hdri)
+    reference sphere (:func:`layered_brdf_addon.blender.principled_target.principled_views`) as
+    ``renders`` says (a :class:`~.fit_request.PrincipledRenders`: size, samples, HDRIs)."""
+    size, samples, hdri_names = renders.size, renders.samples, list(renders.hdris)
     try:
         blend = check_blend_file(source.path)
     except ParameterError as e:
@@ -281,7 +177,7 @@ def load_principled_target(source: Source, ns: argparse.Namespace, guard) -> Loa
 
     hdris = [hdri_path(name) for name in hdri_names]  # a name Blender does not ship: refused before rendering
     guard.arm()
-    with blender_output(ns.verbose):
+    with blender_output(verbose):
         try:
             views = principled_views(blend, source.name, size=size, samples=samples, hdris=hdris)
         except ParameterError as e:

@@ -23,8 +23,7 @@ from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects, render_plan
 from ..model.presets import PAPER_PRESETS, preset
 from ..model.sphere import OrthoCamera, Sun
-from .option_table import GALLERY_SAMPLES, GALLERY_SIZE, read_options
-from .option_values import check_preset_names
+from .option_table import GALLERY_SAMPLES, GALLERY_SIZE, read_options, scene_options_of
 from .render_job import render_outputs, sidecar
 from .requests import check_output
 
@@ -207,12 +206,13 @@ def check_preset_lobe(name: str, backend: str) -> None:
 def settings_from_options(options: dict[str, Any]) -> GallerySettings:
     """Validate gallery options (``output``, ``size``, ``samples``, ``backend``, ...) without Blender."""
     o = {k: v for k, v in options.items() if v is not None}
-    scene = read_options("gallery", o)
-    size, samples = scene.get("size", DEFAULT_SIZE), scene.get("samples", DEFAULT_SAMPLES)
-    backend, columns = scene.get("backend", "nodes"), scene.get("columns")
-    sun, strength = scene.get("sun"), scene.get("sun_strength")
-    seed, threads = scene.get("seed", 0), scene.get("threads", 2)
-    names = check_preset_names(o.get("presets") or PAPER_PRESETS)
+    given = read_options("gallery", o)  # each value checked alone; the presets' lobes and the output below
+    scene = {s.name: given[s.name] for s in scene_options_of("gallery") if s.name in given}
+    size, samples = given.get("size", DEFAULT_SIZE), given.get("samples", DEFAULT_SAMPLES)
+    backend, columns = given.get("backend", "nodes"), given.get("columns")
+    sun, strength = given.get("sun"), given.get("sun_strength")
+    seed, threads = given.get("seed", 0), given.get("threads", 2)
+    names = given.get("presets", tuple(PAPER_PRESETS))
     for name in names:
         check_preset_lobe(name, backend)
     output = check_output(o.get("output", DEFAULT_OUTPUT))

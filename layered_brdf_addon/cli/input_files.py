@@ -9,15 +9,15 @@ from __future__ import annotations
 
 import json
 import os
-import stat
 import tomllib
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+from ..io.regular_files import MAX_INPUT_BYTES, FileRefused, read_regular_bytes
+from ..io.regular_files import file_label  # noqa: F401 (the command line's name for it)
 from ..model.params import LOWER_MEDIA, LOWER_MEDIUM_KEYS, ParameterError
 from .option_values import MAX_INT_DIGITS, PARAM_NAMES, check_plain, short_name, shown
 
-MAX_INPUT_BYTES = 1 << 20  # a params or job file: 1 MiB
 _BLEND_MAGIC = (b"BLENDER", b"\x1f\x8b", b"\x28\xb5\x2f\xfd")  # plain, gzip, zstd
 
 
@@ -29,12 +29,6 @@ class FileValueError(ParameterError):
         super().__init__(name, value, allowed)
         self.file = file
         self.args = (f"parameter '{name}' = {value!r} in {file}: allowed {allowed}",)
-
-
-def file_label(path: Any) -> str:
-    """A file's path as the user gave it, for a message (a long one cut at the front)."""
-    text = os.fspath(path) if isinstance(path, (str, os.PathLike)) else repr(shown(path))
-    return text if len(text) <= 80 else "..." + text[-77:]
 
 
 def from_file(e: ParameterError, values: Mapping[str, Any], file: str,
@@ -63,42 +57,16 @@ def merged_values(file_values: Mapping[str, Any], overrides: Mapping[str, Any]) 
     return values
 
 
-_FILE_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
-               (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
-
-
 def read_regular_file(path: str | os.PathLike, name: str, allowed: str, limit: int | None = None,
                       head: int | None = None) -> bytes:
     """The bytes of a regular file (at most ``head`` of them), or :class:`ParameterError`
     naming ``name``: for a file that cannot be opened, one that is not a regular file (a
-    FIFO, a device, a folder: never waited on or read), and one over ``limit`` bytes."""
-    p = Path(path)
-    try:  # O_NONBLOCK: opening a FIFO does not wait for a writer
-        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
-    except OSError as e:
-        raise ParameterError(name, str(p), f"{allowed} ({e.strerror or e})") from None
+    FIFO, a device, a folder: never waited on or read), and one over ``limit`` bytes
+    (:func:`..io.regular_files.read_regular_bytes`)."""
     try:
-        mode = os.fstat(fd).st_mode
-        if not stat.S_ISREG(mode):
-            kind = next((k for test, k in _FILE_KINDS if test(mode)), "not a regular file")
-            raise ParameterError(name, str(p), f"{allowed} (a regular file; this is {kind})")
-        os.set_blocking(fd, True)
-        want = head if head is not None else (limit + 1 if limit is not None else -1)
-        chunks, total = [], 0
-        while want < 0 or total < want:
-            chunk = os.read(fd, 1 << 16 if want < 0 else min(1 << 16, want - total))
-            if not chunk:
-                break
-            chunks.append(chunk)
-            total += len(chunk)
-    except OSError as e:
-        raise ParameterError(name, str(p), f"{allowed} ({e.strerror or e})") from None
-    finally:
-        os.close(fd)
-    data = b"".join(chunks)
-    if limit is not None and head is None and len(data) > limit:
-        raise ParameterError(name, str(p), f"{allowed} (at most {limit // (1 << 20)} MiB; this file is larger)")
-    return data
+        return read_regular_bytes(path, limit=limit, head=head)
+    except FileRefused as e:
+        raise ParameterError(name, str(Path(path)), f"{allowed} ({e.reason})") from None
 
 
 def read_table_file(path: str | os.PathLike, name: str, allowed: str) -> Any:

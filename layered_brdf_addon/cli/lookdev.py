@@ -32,7 +32,6 @@ from ..model.policy import render_plan
 from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
 from .gallery import GalleryLayout, compose_sheet, layout_for
 from .option_table import LOOKDEV_SAMPLES, LOOKDEV_SIZE, read_options
-from .option_values import check_preset_names
 from .render_job import view_png_encoding
 
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"
@@ -85,10 +84,7 @@ def settings_from_options(options: dict[str, Any]) -> LookdevSettings:
     o = {k: v for k, v in options.items() if v is not None}
     sheet = read_options("lookdev", o)
     size, samples = sheet.get("size", DEFAULT_SIZE), sheet.get("samples", DEFAULT_SAMPLES)
-    names = check_preset_names(o.get("presets") or DEFAULT_PRESETS)
-    hdri = o.get("hdri")
-    if hdri is not None and (not isinstance(hdri, str) or not hdri.strip() or "/" in hdri):
-        raise ParameterError("hdri", hdri, "the name of one of Blender's bundled HDRIs (forest, courtyard, ...)")
+    names, hdri = sheet.get("presets", DEFAULT_PRESETS), sheet.get("hdri")
     columns = sheet.get("columns")
     output = check_sheet_output(o.get("output", DEFAULT_OUTPUT))
     return LookdevSettings(output=output, size=size, samples=samples, presets=names, hdri=hdri, columns=columns)

@@ -29,17 +29,10 @@ MAX_STEM_BYTES = 200  # bytes (UTF-8) of an output stem's file name
 
 SUN_ALLOWED = ("three finite numbers X Y Z, the direction towards the sun, with a length of at least 1e-9 "
                "whose square is finite (|X|, |Y|, |Z| below about 1e154)")
-# What each option allows, for messages: a command's own options here, the scene options' joined from their
-# table (.option_table) when it is imported.
-OPTION_ALLOWED = {
-    "name": f"a name of 1-{MAX_NAME} characters without '/', '\\' or NUL, not starting with '.'",
-    "preset": "one of " + ", ".join(sorted(PRESETS)),
-    "params": "the path of a .json or .toml file of parameter values",
-    "blend": "the path of a .blend file",
-    "object": "the name of the object in the .blend that gets the material",
-    "resolution": f"N or WxH with integers in [1, {MAX_RESOLUTION}]",
-    "output": "a file path stem in a writable folder (STEM.png, STEM.exr and STEM.json are written)",
-}
+NAME_ALLOWED = f"a name of 1-{MAX_NAME} characters without '/', '\\' or NUL, not starting with '.'"
+RESOLUTION_ALLOWED = f"N or WxH with integers in [1, {MAX_RESOLUTION}]"
+# What each option allows, for messages: joined from the option table (.option_table) when it is imported.
+OPTION_ALLOWED: dict[str, str] = {}
 
 
 # ---------------------------------------------------------------------------
@@ -98,7 +91,7 @@ def check_preset_names(names: Sequence[Any]) -> tuple[str, ...]:
 
 def check_name(value: Any, name: str = "name") -> str:
     """A job or render name: used as a file name, so it is a name and not a path."""
-    allowed = OPTION_ALLOWED["name"]
+    allowed = NAME_ALLOWED
     if not isinstance(value, str) or not value.strip() or len(value) > MAX_NAME:
         raise ParameterError(name, shown(value), allowed)
     if any(c in value for c in "/\\\x00") or value.startswith(".") or os.path.isabs(value):
@@ -140,7 +133,7 @@ def float_option(name: str, value: Any, lo: float = -math.inf, hi: float = math.
 
 def parse_resolution(value: Any) -> tuple[int, int]:
     """``N`` (square), ``"WxH"`` or ``[W, H]`` as ``(width, height)``."""
-    allowed = f"N or WxH with integers in [1, {MAX_RESOLUTION}]"
+    allowed = RESOLUTION_ALLOWED
     if isinstance(value, (list, tuple)):
         parts = list(value)
     elif isinstance(value, str) and "x" in value.lower():

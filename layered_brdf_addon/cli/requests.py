@@ -14,20 +14,17 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from ..model import policy
 from ..model.params import LayeredParams, ParameterError
-from ..model.presets import PRESETS, preset
+from ..model.presets import preset
 from ..io.staging import OutputPaths, TargetError, check_targets, output_stem
 from ..model.sphere import OrthoCamera, Sun
 from .input_files import check_blend_file, file_label, from_file, load_params_file, merged_values, same_file
-from .option_table import options_of, read_options
-from .option_values import (MAX_STEM_BYTES, MAX_TEXT, OPTION_ALLOWED, PARAM_NAMES, check_name, check_plain,
-                            option_flag, parse_resolution, short_name, shown)
-
-RENDER_OWN = ("name", "preset", "params", "blend", "object", "resolution", "output")  # render's own options
+from .option_table import job_options, options_of, read_options, scene_options_of
+from .option_values import MAX_STEM_BYTES, MAX_TEXT, OPTION_ALLOWED, PARAM_NAMES, check_plain, option_flag, short_name, shown
 
 
 def run_options() -> tuple[str, ...]:
-    """The options of ``render`` (and of a job): its own, then the scene options its table declares."""
-    return RENDER_OWN + tuple(s.name for s in options_of("render"))
+    """The options of ``render`` that a request (and a job) holds, as the option table declares them."""
+    return job_options()
 
 
 def reference_only() -> tuple[str, ...]:
@@ -75,12 +72,16 @@ class RenderRequest:
                    strength=default.strength if self.sun_strength is None else self.sun_strength)
 
     def to_argv(self) -> list[str]:
-        """Arguments of ``render`` that reproduce this request (absolute paths)."""
+        """Arguments of ``render`` that reproduce this request (absolute paths): each option of the table
+        (the request's value where it has a field, else as read), then the parameters given."""
         argv: list[str] = []
-        if self.preset:
-            argv += ["--preset", self.preset]
-        if self.params_file:
-            argv += ["--params", str(self.params_file)]
+        for spec in options_of("render"):
+            if not spec.job:
+                continue
+            attr = spec.field or spec.name
+            value = getattr(self, attr) if attr in self.__dataclass_fields__ else self.scene_options.get(spec.name)
+            if value is not None:
+                argv += spec.to_argv(value)
         for name, value in self.overrides.items():
             spec = LayeredParams.spec(name)
             flag = option_flag(name)
@@ -88,18 +89,6 @@ class RenderRequest:
                 argv.append(flag if value else "--no-" + flag[2:])
             else:
                 argv += [flag, repr(value) if isinstance(value, float) else str(value)]
-        if self.blend:
-            argv += ["--blend", str(self.blend), f"--object={self.object}"]
-        for spec in options_of("render"):  # the request's value where it has a field, else as read
-            value = getattr(self, spec.name) if spec.name in self.__dataclass_fields__ else \
-                self.scene_options.get(spec.name)
-            if value is not None:
-                argv += spec.to_argv(value)
-        if self.resolution is not None:
-            argv += ["--resolution", f"{self.resolution[0]}x{self.resolution[1]}"]
-        if self.name:
-            argv.append(f"--name={self.name}")
-        argv += ["--output", str(self.output)]
         return argv
 
 
@@ -178,13 +167,8 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
                                  + ") or a parameter name (" + ", ".join(PARAM_NAMES) + ")")
         check_plain(key, opts[key])
     base = Path(base_dir) if base_dir is not None else None
-    name = opts.get("name")
-    if name is not None:
-        check_name(name)
-
-    preset_name = opts.get("preset")
-    if preset_name is not None and (not isinstance(preset_name, str) or preset_name not in PRESETS):
-        raise ParameterError("preset", shown(preset_name), "one of " + ", ".join(sorted(PRESETS)))
+    given = read_options("render", opts)  # each value checked alone; together and on disk below
+    name, preset_name = given.get("name"), given.get("preset")
     params = preset(preset_name) if preset_name else LayeredParams()
     params_file, file_values, label = None, {}, ""
     if "params" in opts:
@@ -200,7 +184,7 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
             raise from_file(e, file_values, label, overridden=overrides) from None
         overrides = {k: getattr(params, k) for k in overrides}
 
-    scene = read_options("render", opts)
+    scene = {s.name: given[s.name] for s in scene_options_of("render") if s.name in given}
     backend = scene.get("backend", "nodes")
     try:
         policy.check_backend(backend, params.lobe)
@@ -220,7 +204,7 @@ def request_from_options(options: Mapping[str, Any], *, base_dir: str | os.PathL
         raise ParameterError("object", opts["object"], "no value without a .blend (the reference scene has one sphere)")
 
     samples, threads = scene.get("samples"), scene.get("threads")
-    resolution = parse_resolution(opts["resolution"]) if "resolution" in opts else None
+    resolution = given.get("resolution")
     if blend is None:
         samples = REFERENCE_SAMPLES if samples is None else samples
         resolution = resolution or (REFERENCE_RESOLUTION, REFERENCE_RESOLUTION)

@@ -18,6 +18,7 @@ from ..model.errors import ParameterError
 from ..model.params import LayeredParams
 from ..model.sphere import OrthoCamera, Sun
 from .messages import shown
+from .regular_files import MAX_INPUT_BYTES, FileRefused, read_regular_bytes
 from .staging import OutputPaths, output_stem
 
 SIDECAR_FORMAT = "layered-brdf render"
@@ -45,14 +46,51 @@ def write_json(path: str | os.PathLike, data: Mapping[str, Any]) -> Path:
     return Path(path)
 
 
-def read_sidecar(path: str | os.PathLike) -> dict[str, Any]:
-    """A render's sidecar (``stem.json`` or any path of the set)."""
+_JSON_KINDS = {list: "array", str: "string", int: "number", float: "number", bool: "boolean", type(None): "null"}
+
+
+class SidecarError(ValueError):
+    """A render's sidecar (or the render it describes) that cannot be read as asked: ``reason``
+    says why, ``field`` which input it concerns (``"target"``: the render's files; ``"tile"``: the
+    sphere chosen of it), ``path`` the sidecar."""
+
+    def __init__(self, reason: str, field: str = "target", path: str | os.PathLike | None = None):
+        self.reason = reason
+        self.field = field
+        self.path = None if path is None else Path(path)
+        super().__init__(reason if path is None else f"{path}: {reason}")
+
+
+def sidecar_path(path: str | os.PathLike) -> Path:
+    """The sidecar ``STEM.json`` of any path of a render's set (``STEM``, ``STEM.json``, ``STEM.exr``,
+    ``STEM.png``)."""
     p = Path(path)
-    if p.suffix.lower() != ".json":
-        p = OutputPaths(output_stem(p)).json
-    data = json.loads(p.read_text(encoding="utf-8"))
-    if data.get("format") != SIDECAR_FORMAT:
-        raise ValueError(f"{p} is not a layered-brdf sidecar")
+    return p if p.suffix.lower() == ".json" else OutputPaths(output_stem(p)).json
+
+
+def read_sidecar(path: str | os.PathLike) -> dict[str, Any]:
+    """A render's sidecar (``STEM.json`` or any path of the set) as a dict; :class:`SidecarError`
+    saying why when it cannot be read (missing, not a regular file, over :data:`MAX_INPUT_BYTES`,
+    not UTF-8 JSON) or is not the sidecar of a layered-brdf render."""
+    p = sidecar_path(path)
+    try:
+        raw = read_regular_bytes(p, limit=MAX_INPUT_BYTES)
+    except FileRefused as e:
+        raise SidecarError(e.reason, path=p) from None
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as e:
+        raise SidecarError(f"not UTF-8 text ({e})", path=p) from None
+    except json.JSONDecodeError as e:
+        raise SidecarError(f"not JSON ({e.msg}, line {e.lineno} column {e.colno})", path=p) from None
+    except RecursionError:
+        raise SidecarError("values nested deeper than can be read", path=p) from None
+    except ValueError:  # the parser's only other error: int() refuses a literal of over 4300 digits
+        raise SidecarError("an integer too long to read", path=p) from None
+    if not isinstance(data, dict) or data.get("format") != SIDECAR_FORMAT:
+        what = (f"its format is {shown(data.get('format'))!r}, not {SIDECAR_FORMAT!r}" if isinstance(data, dict)
+                else f"a JSON {_JSON_KINDS.get(type(data), 'value')}, not an object whose format is {SIDECAR_FORMAT!r}")
+        raise SidecarError(f"not the sidecar of a layered-brdf render ({what})", path=p)
     return data
 
 
