@@ -34,6 +34,34 @@ def held_out() -> dict:
     }
 
 
+def generated_targets() -> dict:
+    """name: a material of no preset's values for a fit with no start (model selection), spanning the
+    optics (paper, physical), the lower boundaries (parallel, tilted, correlated), the bases (none,
+    see-through, metal, diffuse colour) and lower media (water, air, titanium, copper, gold, alumina, chitin,
+    glass); thickness by height, which numpy reproduces pixel by pixel."""
+    h = {"thickness_mode": "height"}
+    return {
+        "paper_tilted_diffuse": preset("fig6_medium").replace(d_min=350, d_max=520, tilt=6.0, kd=0.5, r1_r=1.45,
+                                                              r1_g=1.5, r1_b=1.56, **h),
+        "paper_parallel_blue_base": preset("fig4_parallel").replace(d_min=150, d_max=260, kd=0.6, base_r=0.2,
+                                                                    base_g=0.5, base_b=0.7, **h),
+        "paper_correlated": preset("fig5_correlated").replace(d_min=200, d_max=450, e0=200, e1=320, **h),
+        "paper_tilted_sideways": preset("fig4_tilted").replace(d_min=300, d_max=420, tilt=9.0, tilt_azimuth=90.0,
+                                                               kd=0.2, **h),
+        "oil_on_water": preset("oil_slick").replace(d_min=300, d_max=520, kd=0.2, **h),
+        "soap_see_through": preset("soap_bubble").replace(d_min=350, d_max=800, e0=600, e1=900),
+        "titanium_gold_oxide": preset("anodised_titanium").replace(d_min=80, d_max=140, **h),
+        "copper_oxide": preset("old_metal").replace(d_min=40, d_max=110, **h),
+        "chitin_over_air": preset("beetle_shell").replace(d_min=420, d_max=620, kd=0.15, **h),
+        "glaze_diffuse": preset("glazed_clay").replace(d_min=180, d_max=330, kd=0.6, base_r=0.6, base_g=0.3,
+                                                       base_b=0.2, **h),
+        "oxide_on_gold": preset("anodised_titanium").replace(lower_medium="gold", d_min=100, d_max=160, **h),
+        "oil_on_glass_tilted": preset("oil_slick").replace(lower_medium="glass", normal_mode="tilted", tilt=5.0,
+                                                           d_min=250, d_max=400, **h),
+        "paper_uniform_clay": preset("fig3_clay").replace(d_min=260, d_max=260, ks=0.6, kd=0.8, **h),
+    }
+
+
 def views_of(params, suns=SUNS[:1]) -> list[SphereView]:
     """The closure form's images of ``params`` on the reference sphere, one per sun; with a
     transparent base, what the fit's model sees through the sphere too (its far side)."""

@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.cli import commands as cli
-from layered_brdf_addon.cli.fit_options import DEFAULT_STARTS
 from layered_brdf_addon.cli.fit_request import start_of
 from layered_brdf_addon.cli.fit_outputs import PRESET_FORMAT
 from layered_brdf_addon.cli.fit_targets import column_role, reflectance_rows
@@ -195,11 +194,14 @@ def test_a_thin_film_optics_table_is_fitted(tmp_path, capsys):
     code, out, err = run_fit("--reflectance", tmp_path / "tio2.csv", "--output", tmp_path / "out" / "tio2",
                              capsys=capsys)
     assert code == 0, err
-    assert out.startswith("fit: mean CIEDE2000") and str(tmp_path / "out" / "tio2.json") in out
+    assert "\nfit: mean CIEDE2000" in out and str(tmp_path / "out" / "tio2.json") in out
     assert files_under(tmp_path / "out") == ["tio2.json", "tio2.png"]
     doc = json.loads((tmp_path / "out" / "tio2.json").read_text())
     params = fitted_params(tmp_path / "out" / "tio2.json")
-    assert doc["fit"]["start"]["preset"] == DEFAULT_STARTS["reflectance"][0]
+    assert doc["fit"]["start"]["chosen_by"] == "model selection"  # no --start: the fit chose the structure
+    tried = doc["fit"]["structures"]
+    assert all(t["modes"]["normal_mode"] == "parallel" for t in tried)  # a smooth film's table
+    print(f"\nchosen: {doc['fit']['structure']}")
     assert doc["fit"]["target"]["angles"] == [0.0, 30.0, 60.0]
     assert doc["fit"]["mean_delta_e_2000"] <= TABLE_DELTA_E
     # Interference fixes the optical thickness n d, not n and d apart.
@@ -341,18 +343,14 @@ def test_an_output_over_an_input_is_refused(tmp_path, capsys):
 
 def test_the_start_takes_a_params_file_and_mode_options(tmp_path):
     parser = cli.build_parser()
-    ns = parser.parse_args(["fit", "t.json"])
-    for kind, (name, modes) in DEFAULT_STARTS.items():
-        params, record = start_of(vars(ns), kind)
-        assert params == preset(name).replace(**modes) and record["preset"] == name
-        assert record["overrides"] == modes
-    assert start_of(vars(ns), "principled")[0].thickness_mode == "height"
-    ns = parser.parse_args(["fit", "t.json", "--thickness-mode", "noise"])
-    assert start_of(vars(ns), "principled")[0].thickness_mode == "noise"
+    ns = parser.parse_args(["fit", "t.json", "--start", "glazed_clay", "--thickness-mode", "noise"])
+    params, record = start_of(vars(ns))
+    assert params == preset("glazed_clay").replace(thickness_mode="noise") and record["preset"] == "glazed_clay"
+    assert record["overrides"] == {"thickness_mode": "noise"}
     (tmp_path / "p.toml").write_text('d_min = 120.0\nd_max = 180.0\noptics = "paper"\n')
     ns = parser.parse_args(["fit", "t.json", "--params", str(tmp_path / "p.toml"), "--lower-medium", "gold",
                             "--optics", "physical", "--accuracy", "rgb"])
-    params, record = start_of(vars(ns), "render")
+    params, record = start_of(vars(ns))
     assert (params.d_min, params.d_max, params.optics, params.lower_medium, params.accuracy) == \
         (120.0, 180.0, "physical", "gold", "rgb")
     assert record["preset"] is None and record["overrides"]["lower_medium"] == "gold"
@@ -403,7 +401,7 @@ def test_a_blender_render_is_fitted_and_the_fit_renders_to_it(tmp_path):
     res = run_cli("fit", "target.png", "--output", "out/fit", "--no-progress", cwd=tmp_path)
     seconds = time.perf_counter() - t0
     assert res.returncode == 0, res.stderr
-    assert res.stdout.startswith("fit: mean CIEDE2000") and res.stdout.count("\n") == 1
+    assert "\nfit: mean CIEDE2000" in res.stdout and "structure tried" in res.stdout  # no --start: chosen
     assert files_under(tmp_path / "out") == ["fit.json", "fit.png"]
     record = json.loads((tmp_path / "out" / "fit.json").read_text())["fit"]
     assert record["mean_delta_e_2000"] <= ROUND_TRIP_DELTA_E

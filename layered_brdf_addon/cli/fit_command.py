@@ -31,7 +31,7 @@ from __future__ import annotations
 import sys
 from typing import Callable, Sequence
 
-from ..fit import solve
+from ..fit import solve, structures
 from ..fit.free import default_vary, film_vary
 from ..fit.solve import FitCancelled
 from ..io.staging import InterruptGuard
@@ -39,6 +39,7 @@ from ..model.params import LayeredParams
 from .fit_outputs import fit_record, output_document, reflectance_figure, sphere_figure, write_outputs
 from .fit_request import FitRequest
 from .fit_targets import load_principled_target, load_reflectance_target, load_render_target
+from .fit_verify import verify
 from .options import EXIT_OK
 
 STEPS_PER_START = 40  # the optimiser's steps from each start
@@ -69,6 +70,28 @@ def fit_with_progress(target, start: LayeredParams, vary, starts: int, enabled: 
     return result
 
 
+def select_with_progress(target, req: FitRequest, should_stop: Callable[[], bool]):
+    """:func:`~layered_brdf_addon.fit.structures.select_and_fit` over the request's structures with a
+    tqdm bar of model evaluations, its label the stage (``screen K/N``, then ``fit K/N``)."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=None, desc="fit", unit="eval", file=sys.stderr, disable=not req.progress, dynamic_ncols=True)
+
+    shown_stage = [""]
+
+    def progress(stage: str, evaluations: int) -> None:
+        if shown_stage[0] != stage:
+            shown_stage[0] = stage
+            bar.set_description_str(stage, refresh=False)
+        bar.update(evaluations - bar.n)
+
+    try:
+        return structures.select_and_fit(target, req.pool, req.vary, starts=req.starts,
+                                         steps_per_start=STEPS_PER_START, progress=progress, should_stop=should_stop)
+    finally:
+        bar.close()
+
+
 def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
     """``fit``: read (or render) the validated request's target, fit, write OUT.json and OUT.png."""
     source, paths = req.source, req.paths
@@ -80,17 +103,44 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
         else:
             loaded = load_principled_target(source, req.principled, guard, verbose=req.verbose)
         guard.check()
+        stop = lambda: guard.received is not None  # noqa: E731
+        selection = None
         try:
-            result = fit_with_progress(loaded.target, req.start, req.vary, req.starts, req.progress,
-                                       should_stop=lambda: guard.received is not None)
+            if req.pool:
+                selection = select_with_progress(loaded.target, req, stop)
+                result = selection.result
+            else:
+                result = fit_with_progress(loaded.target, req.start, req.vary, req.starts, req.progress, stop)
         except FitCancelled:
             raise KeyboardInterrupt("the fit was interrupted") from None
         guard.check()
+        record_extra = {}
+        if req.verify:
+            record_extra["verify"] = verify(loaded.target, loaded.record, result.params, guard)
         draw = reflectance_figure if source.kind == "reflectance" else sphere_figure
-        figure = draw(loaded.target, result.params, result.mean_delta_e)
+        figure = draw(loaded.target, result.params, result.mean_delta_e,
+                      structure=selection.chosen.label if selection is not None else None)
         document = output_document(paths.stem.name, result.params,
-                                   fit_record(result, loaded, dict(req.start_record), argv))
+                                   {**fit_record(result, loaded, dict(req.start_record), argv, selection),
+                                    **record_extra})
         write_outputs(paths, document, figure, guard)
+    if selection is not None:
+        print(structures_table(selection))
     print(f"fit: mean CIEDE2000 {result.mean_delta_e:.3f}, {result.seconds:.1f} s, {result.evaluations} "
           f"evaluations; wrote {paths.json}, {paths.png}")
+    if "verify" in record_extra:
+        v = record_extra["verify"]
+        print(f"re-rendered: mean CIEDE2000 {v['mean_delta_e_2000']:.3f} over the sphere's {v['pixels']} pixels "
+              f"(the fit's own figure {result.mean_delta_e:.3f} over {loaded.record.get('pixels')} sampled)")
     return EXIT_OK
+
+
+def structures_table(selection) -> str:
+    """The structures tried, best first (``*`` the one chosen): the full fit's mean CIEDE2000 (the
+    finalists) and the screening's."""
+    width = max(len(c.label) for c in selection.candidates)
+    lines = [f"  {'structure tried':<{width}}  screened  fitted"]
+    for c in selection.candidates:
+        fitted = f"{c.delta_e:6.2f}" if c.delta_e is not None else "     -"
+        lines.append(f"{'*' if c is selection.chosen else ' '} {c.label:<{width}}  {c.screen_delta_e:8.2f}  {fitted}")
+    return "\n".join(lines)

@@ -12,16 +12,10 @@ from ..fit.environment import DEFAULT_HDRIS
 from ..fit.free import CONTINUOUS, check_vary
 from ..model.params import PARAM_SPECS, ParameterError
 from ..model.presets import PRESETS
-from .option_spec import OptionSpec, as_given, ints, preset_name
+from .option_spec import OptionSpec, as_given, ints, preset_name, switch
 from .option_values import check_plain, shown
 from .options import param_metavar
 
-# The start when neither --start nor --params is given, by the target's kind: the preset whose
-# fits of test targets came closest (layered renders of physical and paper films; Principled
-# BSDF materials: a dielectric with and without a thin film, a metal with one).  A Principled
-# BSDF's film is uniform: its start's thickness goes by height, which a fit can make uniform.
-DEFAULT_STARTS = {"render": ("soap_bubble", {}), "principled": ("glazed_clay", {"thickness_mode": "height"}),
-                  "reflectance": ("anodised_titanium", {})}
 # The start's modes an option may override (the options of ``render`` for them).
 MODE_OPTIONS = ("thickness_mode", "normal_mode", "optics", "lower_medium", "base_layer", "accuracy")
 STARTS_RANGE, STARTS_DEFAULT = (1, 10), 3
@@ -94,11 +88,8 @@ FIT_OPTIONS = (
                HDRIS_ALLOWED, _hdri_names, ("fit",), defaults={"fit": " ".join(PRINCIPLED_HDRIS)}, metavar="NAME",
                nargs="+", group=TARGET, job=False, goes_with="principled"),
     OptionSpec("start", "the preset the fit starts from, whose modes (optics, lower medium, normals, thickness "
-               "pattern) it keeps: they decide what the fit can reach, so choose the preset of the target's kind of "
-               "material", "one of " + ", ".join(sorted(PRESETS)), preset_name, ("fit",),
-               defaults={"fit": f"{DEFAULT_STARTS['render'][0]} for TARGET, {DEFAULT_STARTS['principled'][0]} with "
-                         f"--thickness-mode height for --principled, {DEFAULT_STARTS['reflectance'][0]} for "
-                         "--reflectance: the presets that came closest on test targets of each kind"},
+               "pattern) it keeps: they decide what the fit can reach", "one of " + ", ".join(sorted(PRESETS)), preset_name, ("fit",),
+               defaults={"fit": "none: the fit chooses the structure among every preset's (docs/fitting.md)"},
                metavar="PRESET", group=START, job=False),
     OptionSpec("params", "start from the parameter values of a file (a render's sidecar or an earlier fit's "
                "OUT.json work too), over --start when given", "the path of a .json or .toml file of parameter "
@@ -115,4 +106,7 @@ FIT_OPTIONS = (
                  choices=spec.options, group=START, job=False) for spec in PARAM_SPECS if spec.name in MODE_OPTIONS),
     OptionSpec("output", "output stem: writes OUT.json and OUT.png", OUTPUT_ALLOWED, as_given, ("fit",),
                defaults={"fit": "out/NAME-fit, NAME the target's"}, metavar="OUT", group=OUTPUT, job=False),
+    OptionSpec("verify", "render the fit as the target was rendered ('render', Cycles) and compare every pixel of "
+               "the sphere; OUT.json and the summary give both figures (a reference-sphere render's target)", "",
+               switch, ("fit",), action="store_true", group=OUTPUT, job=False, goes_with="target"),
 )

@@ -64,9 +64,13 @@ def default_output(source: Source) -> Path:
     return DEFAULT_OUTPUT_DIR / f"{name}-fit"
 
 
-def fit_record(result, loaded: LoadedTarget, start_record: dict[str, Any], argv: Sequence[str] | None) -> dict:
-    """The ``fit`` table of ``OUT.json``."""
-    return {"target": loaded.record, "start": start_record, "vary": list(result.vary),
+def fit_record(result, loaded: LoadedTarget, start_record: dict[str, Any], argv: Sequence[str] | None,
+               selection=None) -> dict:
+    """The ``fit`` table of ``OUT.json``; with a model selection, the structures tried (best first: each
+    one's label, modes, screening figure and, for a finalist, its full fit's) and the one chosen."""
+    chosen = {} if selection is None else {"structure": selection.chosen.label,
+                                           "structures": selection.to_record()}
+    return {"target": loaded.record, "start": start_record, **chosen, "vary": list(result.vary),
             "mean_delta_e_2000": float(result.mean_delta_e), "evaluations": int(result.evaluations),
             "seconds": float(result.seconds),
             "starts": [{"d_min": float(a), "d_max": float(b), "mean_delta_e_2000": float(de)}
@@ -82,13 +86,15 @@ def output_document(name: str, params: LayeredParams, record: dict[str, Any]) ->
             "params": params.validate().to_dict(), "fit": record}
 
 
-def sphere_figure(target, params: LayeredParams, mean_delta_e: float):
-    """Target | fit | CIEDE2000 per pixel, one row per view, each cropped to the fitted sphere."""
+def sphere_figure(target, params: LayeredParams, mean_delta_e: float, structure: str | None = None):
+    """Target | fit | CIEDE2000 per pixel, one row per view, each cropped to the fitted sphere; the
+    structure a model selection chose under the title."""
     from matplotlib.figure import Figure
 
     rows = len(target.views)
     fig = Figure(figsize=(9.6, 3.0 * rows + 0.4), dpi=100, layout="constrained")
-    fig.suptitle(f"layered-brdf fit: mean CIEDE2000 {mean_delta_e:.2f} over the fitted colours", fontsize=11)
+    fig.suptitle(f"layered-brdf fit: mean CIEDE2000 {mean_delta_e:.2f} over the fitted colours"
+                 + (f"\n{structure}" if structure else ""), fontsize=11)
     noise = getattr(target, "matches_statistics", lambda p: False)(params)
     for k, view in enumerate(target.views):
         mask = target.mask(k)
@@ -116,7 +122,7 @@ def sphere_figure(target, params: LayeredParams, mean_delta_e: float):
     return fig
 
 
-def reflectance_figure(target, params: LayeredParams, mean_delta_e: float):
+def reflectance_figure(target, params: LayeredParams, mean_delta_e: float, structure: str | None = None):
     """A swatch per angle, target above fit (one exposure for both), with each angle's CIEDE2000,
     and the reflectance of each channel against the angle, target and fit."""
     from matplotlib.figure import Figure
@@ -127,7 +133,8 @@ def reflectance_figure(target, params: LayeredParams, mean_delta_e: float):
     brightest = float(colour_space.luminance(observed).max(initial=0.0))
     exposure = 1.0 if brightest >= 0.25 else 0.5 / max(brightest, 1e-6)
     fig = Figure(figsize=(max(6.0, 1.1 * len(observed) + 4.5), 4.2), dpi=100)
-    fig.suptitle(f"layered-brdf fit: mean CIEDE2000 {mean_delta_e:.2f}", fontsize=11)
+    fig.suptitle(f"layered-brdf fit: mean CIEDE2000 {mean_delta_e:.2f}" + (f"\n{structure}" if structure else ""),
+                 fontsize=11)
     swatches = fig.add_axes((0.1, 0.16, 0.45, 0.66))
     for i, row in enumerate(to_srgb8(np.stack([observed, fitted]) * exposure) / 255.0):
         for j, colour in enumerate(row):

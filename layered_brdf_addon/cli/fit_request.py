@@ -10,15 +10,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from ..fit.structures import Candidate, candidates
 from ..io.sidecar import sidecar_path
 from ..io.staging import OutputPaths
 from ..model.params import LayeredParams, ParameterError
 from ..model.presets import preset
 from .fit_options import TARGET
-from .fit_options import (DEFAULT_STARTS, MATERIAL_ALLOWED, MODE_OPTIONS, PRINCIPLED_HDRIS, PRINCIPLED_SAMPLES,
+from .fit_options import (MATERIAL_ALLOWED, MODE_OPTIONS, PRINCIPLED_HDRIS, PRINCIPLED_SAMPLES,
                           PRINCIPLED_SIZE, REFLECTANCE_ALLOWED, SOURCE_ALLOWED, STARTS_DEFAULT, TARGET_ALLOWED)
 from .fit_outputs import check_output, default_output
 from .fit_targets import Source
+from .fit_verify import check_verifiable
 from .input_files import file_label, from_file, load_params_file, merged_values
 from .option_table import options_of, read_options
 from .option_values import path_option, shown
@@ -35,11 +37,12 @@ class PrincipledRenders:
 
 @dataclass(frozen=True)
 class FitRequest:
-    """A validated fit: the target named (not yet read), the start and where it came from, the free
-    parameters (``None``: the start's modes decide), the thickness orders tried and the outputs."""
+    """A validated fit: the target named (not yet read), the start and where it came from (or, with
+    neither ``start`` nor ``params``, the structures the fit chooses among), the free parameters
+    (``None``: the structure's modes decide), the thickness orders tried and the outputs."""
 
     source: Source
-    start: LayeredParams
+    start: LayeredParams | None  # None: the fit chooses the structure among ``pool``
     start_record: Mapping[str, Any]
     paths: OutputPaths
     vary: tuple[str, ...] | None = None
@@ -49,6 +52,8 @@ class FitRequest:
     progress: bool = True
     verbose: bool = False
     inputs: tuple[tuple[str, Path], ...] = field(default_factory=tuple)  # files no output may replace
+    pool: tuple[Candidate, ...] = ()  # the structures the fit chooses among (none: the start's is kept)
+    verify: bool = False  # render the fit as the target was and compare
 
 
 def source_of(given: Mapping[str, Any]) -> Source:
@@ -61,7 +66,7 @@ def source_of(given: Mapping[str, Any]) -> Source:
         raise ParameterError("target", shown([given[k] for k in named]) if named else None, SOURCE_ALLOWED)
     kind = named[0]
     for s in options:
-        if s.goes_with is not None and s.goes_with != kind and given.get(s.name) is not None:
+        if s.goes_with is not None and s.goes_with != kind and s.is_set(given.get(s.name)):
             other = next(o for o in options if o.name == s.goes_with)
             why = " (a gallery render's sphere)" if s.goes_with == "target" else ""
             raise ParameterError(s.name, given[s.name], f"no value without {other.flag}{why}")
@@ -81,13 +86,11 @@ def source_of(given: Mapping[str, Any]) -> Source:
     return Source("principled", p, material, [("the .blend", p)])
 
 
-def start_of(given: Mapping[str, Any], kind: str) -> tuple[LayeredParams, dict[str, Any]]:
-    """The parameters the fit starts from, and the record of where they came from: ``start``
-    (default :data:`~.fit_options.DEFAULT_STARTS` by the target's kind; none with only ``params``), a
-    ``params`` file over it, the mode options over both."""
-    name, defaults = given.get("start"), {}
-    if name is None and given.get("params") is None:
-        name, defaults = DEFAULT_STARTS[kind]
+def start_of(given: Mapping[str, Any]) -> tuple[LayeredParams, dict[str, Any]]:
+    """The parameters a fit of one structure starts from, and the record of where they came from:
+    ``start`` (a preset; none with only ``params``), a ``params`` file over it, the mode options over
+    both."""
+    name = given.get("start")
     params = preset(name) if name is not None else LayeredParams()
     file_values, label, params_file = {}, "", None
     if given.get("params") is not None:
@@ -95,7 +98,7 @@ def start_of(given: Mapping[str, Any], kind: str) -> tuple[LayeredParams, dict[s
                                   "the path of a .json or .toml file of parameter values").absolute()
         label = file_label(given["params"])
         file_values = load_params_file(params_file, label)
-    overrides = {**defaults, **{k: given[k] for k in MODE_OPTIONS if given.get(k) is not None}}
+    overrides = {k: given[k] for k in MODE_OPTIONS if given.get(k) is not None}
     try:
         params = LayeredParams.from_dict(merged_values(file_values, overrides), base=params)
     except ParameterError as e:
@@ -103,12 +106,29 @@ def start_of(given: Mapping[str, Any], kind: str) -> tuple[LayeredParams, dict[s
     return params, {"preset": name, "params_file": params_file, "overrides": overrides}
 
 
+def structure_pool(given: Mapping[str, Any], kind: str) -> tuple[Candidate, ...]:
+    """The structures a fit with neither ``start`` nor ``params`` chooses among
+    (:func:`~..fit.structures.candidates`), the mode options given pinned; a sphere target's
+    thickness goes by height unless ``thickness_mode`` says otherwise (numpy reproduces a height
+    pixel by pixel), a reflectance table's film is smooth and uniform (its lower boundary parallel)."""
+    pinned = {k: given[k] for k in MODE_OPTIONS if given.get(k) is not None}
+    if kind == "reflectance":
+        pinned.setdefault("normal_mode", "parallel")
+    return tuple(candidates(pinned, thickness_mode=pinned.pop("thickness_mode", "height")))
+
+
 def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
     """Validate ``fit``'s options (names with ``_``): each value alone (the option table), then the target
     they name, the start, and the outputs (writable, replacing no input)."""
     given = read_options("fit", {k: v for k, v in options.items() if v is not None})
     source = source_of(given)
-    start, record = start_of(given, source.kind)
+    select = given.get("start") is None and given.get("params") is None
+    if select:
+        start, pool = None, structure_pool(given, source.kind)
+        record = {"preset": None, "params_file": None, "chosen_by": "model selection",
+                  "overrides": {k: given[k] for k in MODE_OPTIONS if given.get(k) is not None}}
+    else:
+        (start, record), pool = start_of(given), ()
     inputs = list(source.inputs)
     if record["params_file"] is not None:
         inputs.append(("the params file", record["params_file"]))
@@ -119,6 +139,9 @@ def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
         principled = PrincipledRenders(size=given.get("size", PRINCIPLED_SIZE),
                                        samples=given.get("samples", PRINCIPLED_SAMPLES),
                                        hdris=() if hdris == ("none",) else tuple(hdris))
+    if given.get("verify"):
+        check_verifiable(source, given.get("tile"))
     return FitRequest(source=source, start=start, start_record=record, paths=paths, vary=given.get("vary"),
                       starts=given.get("starts", STARTS_DEFAULT), tile=given.get("tile"), principled=principled,
-                      progress=given.get("progress", True), verbose=given.get("verbose", False), inputs=tuple(inputs))
+                      progress=given.get("progress", True), verbose=given.get("verbose", False), inputs=tuple(inputs),
+                      pool=pool, verify=given.get("verify", False))

@@ -61,6 +61,10 @@ class OptionSpec:
         allowed = f"; {self.allowed}" if self.allowed else ""
         return f"{self.help}{allowed}" + (f" (default {default})" if default else "")
 
+    def is_set(self, value: Any) -> bool:
+        """Whether ``value`` says anything: given, and for a switch not its default."""
+        return value is not None and (self.action is None or bool(value) == (self.action == "store_true"))
+
     def read(self, value: Any) -> Any:
         return self.parse(self.name, value)
 

@@ -161,10 +161,11 @@ def _soft_l1(r: np.ndarray) -> float:
     return float(np.sum(2.0 * (np.sqrt(1.0 + z) - 1.0)))
 
 
-def thickness_starts(objective: _Objective, start: LayeredParams, count: int) -> list[LayeredParams]:
-    """The start and the ``count`` best thickness ranges of a coarse scan (local minima of the
-    loss along the mean thickness, best first), at the start's relative width and at
-    :data:`SCAN_HALF_WIDTHS`."""
+def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
+                     with_start: bool = True) -> list[LayeredParams]:
+    """The start (unless not ``with_start``) and the ``count`` best thickness ranges of a coarse scan
+    (local minima of the loss along the mean thickness, best first), at the start's relative width and
+    at :data:`SCAN_HALF_WIDTHS`."""
     lo, hi = start.d_min, start.d_max
     mids = np.geomspace(*THICKNESS_SCAN_NM, THICKNESS_SCAN_STEPS)
     if getattr(objective.target, "uniform_film", False):
@@ -179,19 +180,20 @@ def thickness_starts(objective: _Objective, start: LayeredParams, count: int) ->
     minima = [i for i in range(len(candidates))
               if (i % n == 0 or losses[i] <= losses[i - 1]) and (i % n == n - 1 or losses[i] <= losses[i + 1])]
     minima.sort(key=lambda i: losses[i])
-    return [start] + [candidates[i] for i in minima[:count]]
+    return ([start] if with_start else []) + [candidates[i] for i in minima[:count]]
 
 
 def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, starts: int = 3,
         steps_per_start: int = 40, progress: Callable[[int], None] | None = None,
-        should_stop: Callable[[], bool] | None = None) -> FitResult:
+        should_stop: Callable[[], bool] | None = None, try_start: bool = True) -> FitResult:
     """Parameters of ``start``'s modes whose closure form best matches ``target``.
 
     ``vary``: the free parameters (default :func:`~.free.default_vary`); the others keep
     ``start``'s values.  ``starts``: how many of the thickness scan's best orders are tried
     besides ``start`` (when the thickness is free), unless one already matches within
     :data:`GOOD_ENOUGH`; ``steps_per_start``: the optimiser's steps from each (each step
-    evaluates the model once per free parameter for the slopes, and once more).  ``progress(evaluations)`` is called at
+    evaluates the model once per free parameter for the slopes, and once more); ``try_start=False``: the
+    scan's orders only, not ``start``'s own thickness.  ``progress(evaluations)`` is called at
     each evaluation of the model; ``should_stop()`` returning True ends the fit with
     :class:`FitCancelled`.
     """
@@ -209,7 +211,7 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     free = FreeParameters(names, start)
     objective = _Objective(target, free, progress, should_stop)
     lo, hi = free.bounds()
-    firsts = thickness_starts(objective, start, starts) if {"d_min", "d_max"} & set(names) else [start]
+    firsts = thickness_starts(objective, start, starts, try_start) if {"d_min", "d_max"} & set(names) else [start]
     best, best_de, tried = None, np.inf, []
     for first in firsts:
         sol = least_squares(objective, free.vector(first, START_MARGIN), jac=objective.jacobian, bounds=(lo, hi),

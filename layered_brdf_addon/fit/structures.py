@@ -1,0 +1,195 @@
+"""Model selection: the film's structure a target calls for, chosen by the fit.
+
+A fit from one start keeps that start's modes (the optics, the lower boundary, the base, the
+lower medium) and moves only continuous parameters, so a target of another kind of film is out
+of its reach: its colour bands cannot appear.  Here the fit tries the structures that could
+explain the target and keeps the best:
+
+1. **Candidates** (:func:`candidates`): every preset's structure (its modes, with its
+   continuous values as the start: a beetle's chitin over air, an oxide on titanium, the
+   paper's tilted dispersive layer...) with each of the three lower boundaries, and physical
+   optics over each named medium of the preset's kind (the metals under an oxide, the
+   dielectrics under a film); the modes the user pins (``--optics``, ``--normal-mode``...) are kept and the
+   candidates that would change them merged away.
+2. **Screening** (:func:`screen`): each candidate on a small sample of the target's pixels
+   (:data:`SCREEN_PIXELS`): the thickness scan of the full fit (its best order), then a few
+   optimiser steps (:data:`SCREEN_STEPS`) from there; its mean CIEDE2000 there is the evidence.
+   A structure that cannot show the target's colour bands, its highlight's tint or its diffuse
+   colour scores badly whatever its thickness, at the cost of a few hundred evaluations of a
+   small sample.
+3. **The full fit** (:func:`select_and_fit`) of the best :data:`FINALISTS` (and any other within
+   :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel; the lowest
+   mean CIEDE2000 wins.  Every candidate's figures are returned for the report.
+
+Nothing here imports bpy.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from ..model.params import LOWER_MEDIA, LayeredParams
+from ..model.presets import PRESETS, preset
+from . import solve
+from .targets import SphereTarget
+
+STRUCTURE_MODES = ("optics", "normal_mode", "base_layer", "lower_medium")  # what a candidate fixes
+SCREEN_PIXELS = 240  # the screening sample's pixels (every view together)
+SCREEN_STEPS = 6  # optimiser steps from the scan's best order, per candidate
+SCREEN_ORDERS = 1  # the scan's orders tried per candidate
+FINALISTS = 2
+FINALIST_MARGIN = 1.25  # a candidate whose screening figure is within this factor of the best's is a finalist too
+NORMAL_MODES = ("parallel", "tilted", "correlated")
+TILT_START_DEG = 6.0  # a tilted candidate's start where its preset's lower boundary is parallel
+TILT_AZIMUTHS_DEG = (90.0, 180.0, 270.0)  # the paper's tilted candidates turned by these, besides their own
+METAL_K = 0.5  # a lower medium whose extinction coefficient exceeds this in every channel is a metal
+
+
+@dataclass
+class Candidate:
+    """A structure tried: its label, the start (a preset's values in the structure's modes) and
+    what the fit found of it (screening figure, and for a finalist the full fit's)."""
+
+    label: str
+    start: LayeredParams
+    preset: str = ""  # the preset whose values it starts from
+    screen_delta_e: float = float("inf")
+    delta_e: float | None = None  # the full fit's mean CIEDE2000 (finalists only)
+    result: solve.FitResult | None = field(default=None, repr=False)
+
+    def modes(self) -> dict[str, str]:
+        return {m: getattr(self.start, m) for m in STRUCTURE_MODES}
+
+    def to_record(self) -> dict:
+        return {"label": self.label, "modes": self.modes(), "from_preset": self.preset, "screen_mean_delta_e_2000": float(self.screen_delta_e),
+                "mean_delta_e_2000": None if self.delta_e is None else float(self.delta_e)}
+
+
+def _structure(p: LayeredParams) -> tuple:
+    """A structure: its modes, whether it has a specular and a diffuse part (a start without one
+    cannot find it: its weight's slope vanishes with the lobe) and a tilted boundary's azimuth."""
+    azimuth = round(p.tilt_azimuth) % 360 if p.normal_mode == "tilted" else None
+    return tuple(getattr(p, m) for m in STRUCTURE_MODES) + (p.ks > 0.0, p.kd > 0.0, azimuth)
+
+
+def _label(name: str, p: LayeredParams) -> str:
+    medium = f" over {p.lower_medium}" if p.optics == "physical" else ""
+    turned = f" (azimuth {p.tilt_azimuth:g} deg)" if p.normal_mode == "tilted" else ""
+    base = {"none": "", "transparent": ", see-through", "metal": ", metal base"}[p.base_layer]
+    diffuse = ", diffuse base" if p.kd > 0.0 else ""
+    return f"{p.optics} optics{medium}, lower boundary {p.normal_mode}{turned}{base}{diffuse}, from {name}"
+
+
+def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | None = None) -> list[Candidate]:
+    """The structures a fit tries: each preset's, with each lower boundary; ``pinned`` modes (``{"optics": "paper"}``...) imposed on every candidate (the
+    candidates that become alike merged), ``thickness_mode`` too where given."""
+    pinned = dict(pinned or {})
+    out: list[Candidate] = []
+    seen: set = set()
+
+    def add(name: str, p: LayeredParams) -> None:
+        p = p.replace(**pinned) if pinned else p
+        if thickness_mode is not None:
+            p = p.replace(thickness_mode=thickness_mode)
+        key = _structure(p)
+        if key not in seen:
+            seen.add(key)
+            out.append(Candidate(_label(name, p), p, name))
+
+    for name in PRESETS:  # the presets' own structures first: they claim a structure before a variant does
+        add(name, preset(name))
+    for name in PRESETS:
+        p = preset(name)
+        for mode in NORMAL_MODES:
+            if mode != p.normal_mode:
+                q = p.replace(normal_mode=mode)
+                add(name, q.replace(tilt=TILT_START_DEG) if mode == "tilted" and p.tilt == 0.0 else q)
+    for c in [c for c in out if c.start.optics == "paper" and c.start.normal_mode == "tilted"]:
+        for turn in TILT_AZIMUTHS_DEG:  # the paper's prism: its colours run along the tilt's azimuth
+            add(c.preset, c.start.replace(tilt_azimuth=(c.start.tilt_azimuth + turn) % 360.0))
+    for name in PRESETS:  # physical optics over each named medium of the preset's kind (a metal, a dielectric)
+        p = preset(name)
+        if p.optics == "physical" and p.base_layer != "transparent" and "lower_medium" not in pinned:
+            for medium in LOWER_MEDIA:
+                q = p.replace(lower_medium=medium) if medium != "custom" else p
+                if medium != "custom" and _metal(q) == _metal(p):
+                    add(name, q)
+    return out
+
+
+def _metal(p: LayeredParams) -> bool:
+    """Whether the lower medium absorbs like a metal (an extinction coefficient above
+    :data:`METAL_K` in every channel)."""
+    return min(p.k2_r, p.k2_g, p.k2_b) > METAL_K
+
+
+def screening_target(target):
+    """A small sample of ``target``'s pixels for screening (a sphere target), else the target."""
+    if isinstance(target, SphereTarget) and target.pixels > SCREEN_PIXELS:
+        return SphereTarget(target.views, pixels=SCREEN_PIXELS)
+    return target
+
+
+@dataclass
+class Selection:
+    """The structure chosen and the fit of it, with every candidate's figures."""
+
+    result: solve.FitResult
+    chosen: Candidate
+    candidates: list[Candidate]
+    seconds: float
+    evaluations: int
+
+    def to_record(self) -> list[dict]:
+        return [c.to_record() for c in self.candidates]
+
+
+def finalists(screened: Sequence[Candidate]) -> list[Candidate]:
+    """The candidates fitted in full: the best :data:`FINALISTS` by screening figure, and any
+    other within :data:`FINALIST_MARGIN` of the best's."""
+    ranked = sorted(screened, key=lambda c: c.screen_delta_e)
+    best = ranked[0].screen_delta_e
+    return [c for k, c in enumerate(ranked) if k < FINALISTS or c.screen_delta_e <= best * FINALIST_MARGIN]
+
+
+def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None = None, *, starts: int = 3,
+                   steps_per_start: int = 40, progress: Callable[[str, int], None] | None = None,
+                   should_stop: Callable[[], bool] | None = None) -> Selection:
+    """Screen every candidate of ``pool`` on a sample of ``target``, fit the finalists on all of it,
+    keep the lowest mean CIEDE2000.  ``progress(stage, evaluations)`` hears each evaluation, the
+    stage ``"screen K/N"`` or ``"fit K/N"``; ``should_stop()`` ends it (:class:`~.solve.FitCancelled`)."""
+    t0 = time.perf_counter()
+    total = 0
+    small = screening_target(target)
+    pool = [replace(c) for c in pool]
+
+    def hearing(stage: str):
+        base = total
+
+        def hear(evaluations: int) -> None:
+            if progress is not None:
+                progress(stage, base + evaluations)
+        return hear
+
+    for k, c in enumerate(pool):
+        stage = f"screen {k + 1}/{len(pool)}"
+        result = solve.fit(small, c.start, vary, starts=SCREEN_ORDERS, steps_per_start=SCREEN_STEPS,
+                           progress=hearing(stage), should_stop=should_stop, try_start=False)
+        c.screen_delta_e, c.start = result.mean_delta_e, result.params
+        total += result.evaluations
+    chosen, best = None, None
+    last = finalists(pool)
+    for k, c in enumerate(last):
+        result = solve.fit(target, c.start, vary, starts=starts, steps_per_start=steps_per_start,
+                           progress=hearing(f"fit {k + 1}/{len(last)}"), should_stop=should_stop)
+        c.delta_e, c.result = result.mean_delta_e, result
+        total += result.evaluations
+        if best is None or result.mean_delta_e < best.mean_delta_e:
+            chosen, best = c, result
+    pool.sort(key=lambda c: (c.delta_e if c.delta_e is not None else np.inf, c.screen_delta_e))
+    seconds = time.perf_counter() - t0
+    best = replace(best, seconds=seconds, evaluations=total)
+    return Selection(best, chosen, pool, seconds, total)
