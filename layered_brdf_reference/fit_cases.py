@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.cycles_closures import closure_shading
 from layered_brdf_addon.fit.targets import SphereTarget, SphereView
 from layered_brdf_addon.model.presets import preset
@@ -76,13 +75,7 @@ def views_of(params, suns=SUNS[:1]) -> list[SphereView]:
 def image_delta_e(target, params) -> float:
     """Mean CIEDE2000 over every pixel of the sphere between a sphere target's images and the
     closure form of ``params`` (the fit samples the pixels; this reads them all)."""
-    out = []
-    for k, view in enumerate(target.views):
-        m = target.mask(k)
-        a = colour_space.lab(view.image[m], target.white_y)
-        b = colour_space.lab(target.render(params, k)[m], target.white_y)
-        out.append(colour_space.delta_e_2000(a, b))
-    return float(np.mean(np.concatenate(out)))
+    return target.image_delta_e(params)
 
 
 FILMS = (("tio2_amorphous", "titanium", 120.0, "anodised_titanium"),

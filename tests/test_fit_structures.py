@@ -12,6 +12,7 @@ import pytest
 from layered_brdf_addon.fit import structures
 from layered_brdf_addon.fit.structures import STRUCTURE_MODES, Candidate, candidates, finalists, select_and_fit
 from layered_brdf_addon.fit.targets import SphereTarget
+from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.presets import PRESETS, preset
 from layered_brdf_reference.fit_cases import image_delta_e, views_of
 
@@ -55,7 +56,8 @@ def test_pinned_modes_hold_for_every_candidate():
     assert all(c.start.normal_mode == "parallel" for c in candidates({"normal_mode": "parallel"}))
 
 
-def test_finalists_are_the_best_two_and_any_close_behind():
+def test_finalists_are_the_best_few_and_any_close_behind(monkeypatch):
+    monkeypatch.setattr(structures, "FINALISTS", 2)
     figures = [4.0, 1.0, 1.2, 9.0, 1.24]
     pool = [Candidate(f"c{k}", preset("soap_bubble"), screen_delta_e=de) for k, de in enumerate(figures)]
     assert [c.label for c in finalists(pool)] == ["c1", "c2", "c4"]  # c4 within 1.25 x the best's
@@ -72,7 +74,8 @@ def test_the_fit_finds_a_structure_that_renders_the_target(truth):
     selection = select_and_fit(target, candidates(thickness_mode="height"))
     assert image_delta_e(target, selection.result.params) <= 0.5
     assert selection.chosen in selection.candidates and selection.chosen.delta_e == selection.result.mean_delta_e
-    ranked = [c.delta_e for c in selection.candidates if c.delta_e is not None]
+    assert selection.chosen is selection.candidates[0]  # the best over every pixel
+    ranked = [c.image_delta_e for c in selection.candidates if c.delta_e is not None]
     assert ranked == sorted(ranked) and len(ranked) >= structures.FINALISTS
     assert all(np.isfinite(c.screen_delta_e) for c in selection.candidates)
 
@@ -86,7 +89,10 @@ def test_without_a_start_the_command_chooses_and_reports_the_structure(tmp_path,
     assert doc["start"]["chosen_by"] == "model selection" and doc["start"]["preset"] is None
     tried = doc["structures"]
     assert len(tried) == len(candidates(thickness_mode="height"))
-    assert doc["structure"] == tried[0]["label"] and tried[0]["mean_delta_e_2000"] == doc["mean_delta_e_2000"]
+    assert doc["structure"] == tried[0]["label"] and tried[0]["mean_delta_e_2000"] == doc["sampled_mean_delta_e_2000"]
+    fitted = LayeredParams.from_dict(json.loads((tmp_path / "fit.json").read_text())["params"])
+    target = SphereTarget(views_of(PAPER_TILTED))  # the figure reported is over every pixel of the sphere
+    assert doc["mean_delta_e_2000"] == pytest.approx(target.image_delta_e(fitted), abs=1e-3)
     assert tried[0]["modes"]["optics"] == "paper" and tried[0]["modes"]["normal_mode"] in ("tilted", "correlated")
     assert doc["mean_delta_e_2000"] <= 0.5
     assert "structure tried" in out and doc["structure"] in out  # the summary lists them

@@ -117,21 +117,20 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
         record_extra = {}
         if req.verify:
             record_extra["verify"] = verify(loaded.target, loaded.record, result.params, guard)
+        record = {**fit_record(result, loaded, dict(req.start_record), argv, selection), **record_extra}
         draw = reflectance_figure if source.kind == "reflectance" else sphere_figure
-        figure = draw(loaded.target, result.params, result.mean_delta_e,
+        figure = draw(loaded.target, result.params, record["mean_delta_e_2000"],
                       structure=selection.chosen.label if selection is not None else None)
-        document = output_document(paths.stem.name, result.params,
-                                   {**fit_record(result, loaded, dict(req.start_record), argv, selection),
-                                    **record_extra})
+        document = output_document(paths.stem.name, result.params, record)
         write_outputs(paths, document, figure, guard)
     if selection is not None:
         print(structures_table(selection))
-    print(f"fit: mean CIEDE2000 {result.mean_delta_e:.3f}, {result.seconds:.1f} s, {result.evaluations} "
+    print(f"fit: mean CIEDE2000 {record['mean_delta_e_2000']:.3f}, {result.seconds:.1f} s, {result.evaluations} "
           f"evaluations; wrote {paths.json}, {paths.png}")
     if "verify" in record_extra:
         v = record_extra["verify"]
         print(f"re-rendered: mean CIEDE2000 {v['mean_delta_e_2000']:.3f} over the sphere's {v['pixels']} pixels "
-              f"(the fit's own figure {result.mean_delta_e:.3f} over {loaded.record.get('pixels')} sampled)")
+              f"(the fit's figure {record['mean_delta_e_2000']:.3f} over the same pixels computed in numpy)")
     return EXIT_OK
 
 

@@ -64,14 +64,25 @@ def default_output(source: Source) -> Path:
     return DEFAULT_OUTPUT_DIR / f"{name}-fit"
 
 
+def reported_delta_e(target, result) -> float:
+    """The figure a fit reports: the mean CIEDE2000 over every pixel of the sphere (what comparing a
+    render of the fit with the target gives) where numpy computes them all, else over what the fit
+    compared (a table's rows, a noise thickness's statistics)."""
+    image = target.image_delta_e(result.params) if hasattr(target, "image_delta_e") else None
+    return float(result.mean_delta_e if image is None else image)
+
+
 def fit_record(result, loaded: LoadedTarget, start_record: dict[str, Any], argv: Sequence[str] | None,
                selection=None) -> dict:
-    """The ``fit`` table of ``OUT.json``; with a model selection, the structures tried (best first: each
-    one's label, modes, screening figure and, for a finalist, its full fit's) and the one chosen."""
+    """The ``fit`` table of ``OUT.json``: the figure over every pixel of the sphere
+    (:func:`reported_delta_e`) and over the sample the fit compared; with a model selection, the
+    structures tried (best first: each one's label, modes, screening figure and, for a finalist, its full
+    fit's) and the one chosen."""
     chosen = {} if selection is None else {"structure": selection.chosen.label,
                                            "structures": selection.to_record()}
     return {"target": loaded.record, "start": start_record, **chosen, "vary": list(result.vary),
-            "mean_delta_e_2000": float(result.mean_delta_e), "evaluations": int(result.evaluations),
+            "mean_delta_e_2000": reported_delta_e(loaded.target, result),
+            "sampled_mean_delta_e_2000": float(result.mean_delta_e), "evaluations": int(result.evaluations),
             "seconds": float(result.seconds),
             "starts": [{"d_min": float(a), "d_max": float(b), "mean_delta_e_2000": float(de)}
                        for a, b, de in result.starts],
@@ -93,7 +104,7 @@ def sphere_figure(target, params: LayeredParams, mean_delta_e: float, structure:
 
     rows = len(target.views)
     fig = Figure(figsize=(9.6, 3.0 * rows + 0.4), dpi=100, layout="constrained")
-    fig.suptitle(f"layered-brdf fit: mean CIEDE2000 {mean_delta_e:.2f} over the fitted colours"
+    fig.suptitle(f"layered-brdf fit: mean CIEDE2000 {mean_delta_e:.2f}"
                  + (f"\n{structure}" if structure else ""), fontsize=11)
     noise = getattr(target, "matches_statistics", lambda p: False)(params)
     for k, view in enumerate(target.views):

@@ -19,7 +19,8 @@ explain the target and keeps the best:
    small sample.
 3. **The full fit** (:func:`select_and_fit`) of the best :data:`FINALISTS` (and any other within
    :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel; the lowest
-   mean CIEDE2000 wins.  Every candidate's figures are returned for the report.
+   mean CIEDE2000 over every pixel of the sphere wins (over the sample where numpy cannot
+   compute every pixel: a noise thickness).  Every candidate's figures are returned for the report.
 
 Nothing here imports bpy.
 """
@@ -40,7 +41,7 @@ STRUCTURE_MODES = ("optics", "normal_mode", "base_layer", "lower_medium")  # wha
 SCREEN_PIXELS = 240  # the screening sample's pixels (every view together)
 SCREEN_STEPS = 6  # optimiser steps from the scan's best order, per candidate
 SCREEN_ORDERS = 1  # the scan's orders tried per candidate
-FINALISTS = 2
+FINALISTS = 3
 FINALIST_MARGIN = 1.25  # a candidate whose screening figure is within this factor of the best's is a finalist too
 NORMAL_MODES = ("parallel", "tilted", "correlated")
 TILT_START_DEG = 6.0  # a tilted candidate's start where its preset's lower boundary is parallel
@@ -57,7 +58,8 @@ class Candidate:
     start: LayeredParams
     preset: str = ""  # the preset whose values it starts from
     screen_delta_e: float = float("inf")
-    delta_e: float | None = None  # the full fit's mean CIEDE2000 (finalists only)
+    delta_e: float | None = None  # the full fit's mean CIEDE2000 over its sample (finalists only)
+    image_delta_e: float | None = None  # ... and over every pixel of the sphere, where numpy computes them
     result: solve.FitResult | None = field(default=None, repr=False)
 
     def modes(self) -> dict[str, str]:
@@ -65,7 +67,13 @@ class Candidate:
 
     def to_record(self) -> dict:
         return {"label": self.label, "modes": self.modes(), "from_preset": self.preset, "screen_mean_delta_e_2000": float(self.screen_delta_e),
-                "mean_delta_e_2000": None if self.delta_e is None else float(self.delta_e)}
+                "mean_delta_e_2000": None if self.delta_e is None else float(self.delta_e),
+                "image_mean_delta_e_2000": None if self.image_delta_e is None else float(self.image_delta_e)}
+
+    def figure(self) -> float:
+        """What ranks a finalist: its figure over every pixel where there is one, else over its sample."""
+        return self.image_delta_e if self.image_delta_e is not None else \
+            self.delta_e if self.delta_e is not None else np.inf
 
 
 def _structure(p: LayeredParams) -> tuple:
@@ -186,10 +194,12 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
         result = solve.fit(target, c.start, vary, starts=starts, steps_per_start=steps_per_start,
                            progress=hearing(f"fit {k + 1}/{len(last)}"), should_stop=should_stop)
         c.delta_e, c.result = result.mean_delta_e, result
+        if hasattr(target, "image_delta_e"):
+            c.image_delta_e = target.image_delta_e(result.params)
         total += result.evaluations
-        if best is None or result.mean_delta_e < best.mean_delta_e:
+        if chosen is None or c.figure() < chosen.figure():
             chosen, best = c, result
-    pool.sort(key=lambda c: (c.delta_e if c.delta_e is not None else np.inf, c.screen_delta_e))
+    pool.sort(key=lambda c: (c.figure(), c.screen_delta_e))
     seconds = time.perf_counter() - t0
     best = replace(best, seconds=seconds, evaluations=total)
     return Selection(best, chosen, pool, seconds, total)

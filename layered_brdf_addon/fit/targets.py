@@ -249,6 +249,20 @@ class SphereTarget:
         v = self.views[view]
         return sphere_geometry(v.camera, v.centers).sphere == v.sphere
 
+    def image_delta_e(self, params: LayeredParams) -> float | None:
+        """Mean CIEDE2000 over every pixel of the fitted sphere in every view between the target's
+        images and ``params`` (what comparing a render of the fit with the target gives; the fit
+        itself reads a sample); None for a noise thickness, whose pattern numpy does not compute."""
+        if self.matches_statistics(params):
+            return None
+        out = []
+        for k, view in enumerate(self.views):
+            m = self.mask(k)
+            a = colour_space.lab(np.maximum(np.asarray(view.image, dtype=float)[..., :3][m], 0.0), self.white_y)
+            b = colour_space.lab(np.maximum(self.render(params, k)[m], 0.0), self.white_y)
+            out.append(colour_space.delta_e_2000(a, b))
+        return float(np.mean(np.concatenate(out)))
+
 
 def light_batches(points: Sequence[dict]) -> list[dict]:
     """The sampled pixels of the views as shading points, one set per light: every sun's views
