@@ -64,7 +64,7 @@ def selection_rows() -> list[tuple]:
         s = select_and_fit(target, pool)
         cpu, wall = time.process_time() - c0, time.perf_counter() - w0
         rows.append((name, f"chosen: {_modes(s.result.params)}", len(s.result.vary), f"{s.result.mean_delta_e:.2f}",
-                     f"{image_delta_e(target, s.result.params):.2f}", s.evaluations, f"{cpu:.1f}", f"{wall:.1f}",
+                     f"{image_delta_e(target, s.result.params):.2f}", s.result.evaluations, f"{cpu:.1f}", f"{wall:.1f}",
                      f"truth: {_modes(truth)}"))
         print(*rows[-1], sep=" | ", flush=True)
     return rows

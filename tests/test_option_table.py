@@ -52,7 +52,8 @@ def test_a_job_file_and_the_command_line_read_it_the_same_way(with_throwaway, tm
     req = requests.request_from_options({"preset": "oil_slick", "bounces": "12", "output": "x"})
     assert req.scene_options["bounces"] == 12
     assert req.to_argv()[req.to_argv().index("--bounces") + 1] == "12"
-    assert gallery.settings_from_options({"bounces": 3, "output": str(tmp_path / "g.png")}).scene_options["bounces"] == 3
+    sheet = gallery.settings_from_options({"bounces": 3, "output": str(tmp_path / "g.png")})
+    assert sheet.scene_options["bounces"] == 3
     with pytest.raises(ParameterError, match=r"'bounces'.*\[0, 64\]"):
         requests.request_from_options({"preset": "oil_slick", "bounces": 65, "output": "x"})
     assert allowed_for("bounces") == "an integer in [0, 64]"

@@ -88,7 +88,8 @@ FIT_OPTIONS = (
                HDRIS_ALLOWED, _hdri_names, ("fit",), defaults={"fit": " ".join(PRINCIPLED_HDRIS)}, metavar="NAME",
                nargs="+", group=TARGET, job=False, goes_with="principled"),
     OptionSpec("start", "the preset the fit starts from, whose modes (optics, lower medium, normals, thickness "
-               "pattern) it keeps: they decide what the fit can reach", "one of " + ", ".join(sorted(PRESETS)), preset_name, ("fit",),
+               "pattern) it keeps: they decide what the fit can reach", "one of " + ", ".join(sorted(PRESETS)),
+               preset_name, ("fit",),
                defaults={"fit": "none: the fit chooses the structure among every preset's (docs/fitting.md)"},
                metavar="PRESET", group=START, job=False),
     OptionSpec("params", "start from the parameter values of a file (a render's sidecar or an earlier fit's "

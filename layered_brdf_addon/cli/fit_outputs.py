@@ -64,11 +64,15 @@ def default_output(source: Source) -> Path:
     return DEFAULT_OUTPUT_DIR / f"{name}-fit"
 
 
-def reported_delta_e(target, result) -> float:
+def reported_delta_e(target, result, selection=None) -> float:
     """The figure a fit reports: the mean CIEDE2000 over every pixel of the sphere (what comparing a
     render of the fit with the target gives) where numpy computes them all, else over what the fit
-    compared (a table's rows, a noise thickness's statistics)."""
-    image = target.image_delta_e(result.params) if hasattr(target, "image_delta_e") else None
+    compared (a table's rows, a noise thickness's statistics).  A selection's chosen structure has it
+    already."""
+    if selection is not None:
+        image = selection.chosen.image_delta_e
+    else:
+        image = target.image_delta_e(result.params) if hasattr(target, "image_delta_e") else None
     return float(result.mean_delta_e if image is None else image)
 
 
@@ -81,7 +85,7 @@ def fit_record(result, loaded: LoadedTarget, start_record: dict[str, Any], argv:
     chosen = {} if selection is None else {"structure": selection.chosen.label,
                                            "structures": selection.to_record()}
     return {"target": loaded.record, "start": start_record, **chosen, "vary": list(result.vary),
-            "mean_delta_e_2000": reported_delta_e(loaded.target, result),
+            "mean_delta_e_2000": reported_delta_e(loaded.target, result, selection),
             "sampled_mean_delta_e_2000": float(result.mean_delta_e), "evaluations": int(result.evaluations),
             "seconds": float(result.seconds),
             "starts": [{"d_min": float(a), "d_max": float(b), "mean_delta_e_2000": float(de)}

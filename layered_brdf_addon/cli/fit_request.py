@@ -86,6 +86,11 @@ def source_of(given: Mapping[str, Any]) -> Source:
     return Source("principled", p, material, [("the .blend", p)])
 
 
+def mode_overrides(given: Mapping[str, Any]) -> dict[str, Any]:
+    """The mode options given (:data:`~.fit_options.MODE_OPTIONS`): over a start, or pinned on every structure."""
+    return {k: given[k] for k in MODE_OPTIONS if given.get(k) is not None}
+
+
 def start_of(given: Mapping[str, Any]) -> tuple[LayeredParams, dict[str, Any]]:
     """The parameters a fit of one structure starts from, and the record of where they came from:
     ``start`` (a preset; none with only ``params``), a ``params`` file over it, the mode options over
@@ -98,7 +103,7 @@ def start_of(given: Mapping[str, Any]) -> tuple[LayeredParams, dict[str, Any]]:
                                   "the path of a .json or .toml file of parameter values").absolute()
         label = file_label(given["params"])
         file_values = load_params_file(params_file, label)
-    overrides = {k: given[k] for k in MODE_OPTIONS if given.get(k) is not None}
+    overrides = mode_overrides(given)
     try:
         params = LayeredParams.from_dict(merged_values(file_values, overrides), base=params)
     except ParameterError as e:
@@ -111,7 +116,7 @@ def structure_pool(given: Mapping[str, Any], kind: str) -> tuple[Candidate, ...]
     (:func:`~..fit.structures.candidates`), the mode options given pinned; a sphere target's
     thickness goes by height unless ``thickness_mode`` says otherwise (numpy reproduces a height
     pixel by pixel), a reflectance table's film is smooth and uniform (its lower boundary parallel)."""
-    pinned = {k: given[k] for k in MODE_OPTIONS if given.get(k) is not None}
+    pinned = mode_overrides(given)
     if kind == "reflectance":
         pinned.setdefault("normal_mode", "parallel")
     return tuple(candidates(pinned, thickness_mode=pinned.pop("thickness_mode", "height")))
@@ -126,7 +131,7 @@ def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
     if select:
         start, pool = None, structure_pool(given, source.kind)
         record = {"preset": None, "params_file": None, "chosen_by": "model selection",
-                  "overrides": {k: given[k] for k in MODE_OPTIONS if given.get(k) is not None}}
+                  "overrides": mode_overrides(given)}
     else:
         (start, record), pool = start_of(given), ()
     inputs = list(source.inputs)

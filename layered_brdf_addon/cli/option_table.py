@@ -113,7 +113,8 @@ OUTPUT_OPTIONS = (
     OptionSpec("output", "the sheet: writes STEM.png and STEM.json", "a file path (.png, or a stem) in a writable "
                "folder", as_given, ("lookdev",), defaults={"lookdev": "out/lookdev.png"}, metavar="PATH",
                group=OUTPUT),
-    OptionSpec("name", "a name recorded in the sidecar", NAME_ALLOWED, lambda name, value: check_name(value, name), ("render",),
+    OptionSpec("name", "a name recorded in the sidecar", NAME_ALLOWED, lambda name, value: check_name(value, name),
+               ("render",),
                metavar="TEXT", group=OUTPUT, text=True),
 )
 BATCH_OPTIONS = (

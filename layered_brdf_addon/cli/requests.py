@@ -19,7 +19,8 @@ from ..io.staging import OutputPaths, TargetError, check_targets, output_stem
 from ..model.sphere import OrthoCamera, Sun
 from .input_files import check_blend_file, file_label, from_file, load_params_file, merged_values, same_file
 from .option_table import job_options, options_of, read_options, scene_options_of
-from .option_values import MAX_STEM_BYTES, MAX_TEXT, OPTION_ALLOWED, PARAM_NAMES, check_plain, option_flag, short_name, shown
+from .option_values import (MAX_STEM_BYTES, MAX_TEXT, OPTION_ALLOWED, PARAM_NAMES, check_plain, option_flag,
+                            short_name, shown)
 
 
 def run_options() -> tuple[str, ...]:

@@ -9,9 +9,9 @@ explain the target and keeps the best:
    continuous values as the start: a beetle's chitin over air, an oxide on titanium, the
    paper's tilted dispersive layer...) with each of the three lower boundaries, and physical
    optics over each named medium of the preset's kind (the metals under an oxide, the
-   dielectrics under a film); the modes the user pins (``--optics``, ``--normal-mode``...) are kept and the
-   candidates that would change them merged away.
-2. **Screening** (:func:`screen`): each candidate on a small sample of the target's pixels
+   dielectrics under a film); the modes the user pins (``--optics``, ``--normal-mode``...) are kept
+   and the candidates that would change them merged away.
+2. **Screening** (in :func:`select_and_fit`): each candidate on a small sample of the target's pixels
    (:data:`SCREEN_PIXELS`): the thickness scan of the full fit (its best order), then a few
    optimiser steps (:data:`SCREEN_STEPS`) from there; its mean CIEDE2000 there is the evidence.
    A structure that cannot show the target's colour bands, its highlight's tint or its diffuse
@@ -20,7 +20,8 @@ explain the target and keeps the best:
 3. **The full fit** (:func:`select_and_fit`) of the best :data:`FINALISTS` (and any other within
    :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel; the lowest
    mean CIEDE2000 over every pixel of the sphere wins (over the sample where numpy cannot
-   compute every pixel: a noise thickness).  Every candidate's figures are returned for the report.
+   compute every pixel: a noise thickness).  Every candidate's figures are returned for the
+   report.
 
 Nothing here imports bpy.
 """
@@ -66,7 +67,8 @@ class Candidate:
         return {m: getattr(self.start, m) for m in STRUCTURE_MODES}
 
     def to_record(self) -> dict:
-        return {"label": self.label, "modes": self.modes(), "from_preset": self.preset, "screen_mean_delta_e_2000": float(self.screen_delta_e),
+        return {"label": self.label, "modes": self.modes(), "from_preset": self.preset,
+                "screen_mean_delta_e_2000": float(self.screen_delta_e),
                 "mean_delta_e_2000": None if self.delta_e is None else float(self.delta_e),
                 "image_mean_delta_e_2000": None if self.image_delta_e is None else float(self.image_delta_e)}
 
@@ -92,8 +94,10 @@ def _label(name: str, p: LayeredParams) -> str:
 
 
 def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | None = None) -> list[Candidate]:
-    """The structures a fit tries: each preset's, with each lower boundary; ``pinned`` modes (``{"optics": "paper"}``...) imposed on every candidate (the
-    candidates that become alike merged), ``thickness_mode`` too where given."""
+    """The structures a fit tries: each preset's, with each lower boundary, the paper's tilted ones turned
+    by :data:`TILT_AZIMUTHS_DEG`, physical films over each named medium of their kind; ``pinned`` modes
+    (``{"optics": "paper"}``...) imposed on every candidate (the candidates that become alike merged),
+    ``thickness_mode`` too where given."""
     pinned = dict(pinned or {})
     out: list[Candidate] = []
     seen: set = set()
@@ -121,9 +125,9 @@ def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | No
     for name in PRESETS:  # physical optics over each named medium of the preset's kind (a metal, a dielectric)
         p = preset(name)
         if p.optics == "physical" and p.base_layer != "transparent" and "lower_medium" not in pinned:
-            for medium in LOWER_MEDIA:
-                q = p.replace(lower_medium=medium) if medium != "custom" else p
-                if medium != "custom" and _metal(q) == _metal(p):
+            for medium in LOWER_MEDIA[1:]:  # the named ones: "custom" is the values given
+                q = p.replace(lower_medium=medium)
+                if _metal(q) == _metal(p):
                     add(name, q)
     return out
 
@@ -145,11 +149,9 @@ def screening_target(target):
 class Selection:
     """The structure chosen and the fit of it, with every candidate's figures."""
 
-    result: solve.FitResult
+    result: solve.FitResult  # its seconds and evaluations the whole selection's
     chosen: Candidate
     candidates: list[Candidate]
-    seconds: float
-    evaluations: int
 
     def to_record(self) -> list[dict]:
         return [c.to_record() for c in self.candidates]
@@ -200,6 +202,4 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
         if chosen is None or c.figure() < chosen.figure():
             chosen, best = c, result
     pool.sort(key=lambda c: (c.figure(), c.screen_delta_e))
-    seconds = time.perf_counter() - t0
-    best = replace(best, seconds=seconds, evaluations=total)
-    return Selection(best, chosen, pool, seconds, total)
+    return Selection(replace(best, seconds=time.perf_counter() - t0, evaluations=total), chosen, pool)
