@@ -4,7 +4,7 @@ The fit reports the mean CIEDE2000 over every pixel of the sphere between the ta
 form computed in numpy.  A user judges a fit by rendering it: here the fitted parameters go through
 ``layered-brdf render`` (a subprocess, the path every render takes) with the target's camera, sun,
 samples, seed and backend, and every pixel of the sphere is compared in the same colour pipeline as the
-fit's figure (CIELAB against the white of the target's sphere, CIEDE2000).  The render lives in a
+fit's figure (CIELAB against the fit's white, CIEDE2000).  The render lives in a
 temporary folder, removed afterwards; nothing of it is left beside the outputs.
 
 A target that is not a render of the reference scene (a gallery's tile, a reflectance table, a
@@ -72,7 +72,7 @@ def verify(target, loaded_record: dict, params: LayeredParams, guard=None) -> di
     mask = target.mask(0)
     observed = np.asarray(target.views[0].image, dtype=float)[..., :3][mask]
     rendered = np.asarray(image, dtype=float)[..., :3][mask]
-    white = target.image_white()  # as the fit's reported figure (SphereTarget.image_delta_e)
+    white = target.white_y  # as the fit's reported figure (SphereTarget.image_delta_e)
     de = colour_space.delta_e_2000(colour_space.lab(np.maximum(observed, 0.0), white),
                                    colour_space.lab(np.maximum(rendered, 0.0), white))
     return {"mean_delta_e_2000": float(np.mean(de)), "pixels": int(mask.sum()), "render_seconds": seconds}

@@ -255,19 +255,13 @@ class SphereTarget:
         itself reads a sample); None for a noise thickness, whose pattern numpy does not compute."""
         if self.matches_statistics(params):
             return None
-        white, out = self.image_white(), []
+        white, out = self.white_y, []  # the fit's own white: one scale for the sample and the image
         for k, view in enumerate(self.views):
             m = self.mask(k)
             a = colour_space.lab(np.maximum(np.asarray(view.image, dtype=float)[..., :3][m], 0.0), white)
             b = colour_space.lab(np.maximum(self.render(params, k)[m], 0.0), white)
             out.append(colour_space.delta_e_2000(a, b))
         return float(np.mean(np.concatenate(out)))
-
-    def image_white(self) -> float:
-        """The white a comparison of whole images is measured against: the 99th percentile luminance
-        of every pixel of the sphere in every view (the fit's own ``white_y`` is its sample's)."""
-        pixels = [np.asarray(v.image, dtype=float)[..., :3][self.mask(k)] for k, v in enumerate(self.views)]
-        return colour_space.white_of(np.concatenate(pixels))
 
 
 def light_batches(points: Sequence[dict]) -> list[dict]:
