@@ -476,14 +476,30 @@ def shader_tables(n: int) -> dict:
     return dict(wavelengths=s.wavelengths.tolist(), cauchy=K.tolist(), rgb=s.matrix.tolist())
 
 
-def write_shader_tables(path=None) -> str:
-    """(Re)write the baked tables; returns the path."""
-    path = Path(path or spectral_tables.PATH)
-    data = {str(n): shader_tables(n) for n in SAMPLE_COUNTS}
+def observer_tables() -> dict:
+    """colour-science's CIE 1931 2 degree CMFs (its 1 nm table) and D65 (its 5 nm table) as
+    tabulated, with the Rec.709 -> XYZ matrix and white: what the fit's colour maths reads
+    (``spectral_tables.observer``), as lists."""
+    cmfs = colour.MSDS_CMFS[CMFS_NAME]
+    d65_sd = colour.SDS_ILLUMINANTS[ILLUMINANT_NAME]
+    return dict(cmf_nm=np.asarray(cmfs.domain, dtype=float).tolist(), cmf=np.asarray(cmfs.values, dtype=float).tolist(),
+                d65_nm=np.asarray(d65_sd.domain, dtype=float).tolist(), d65=np.asarray(d65_sd.values, dtype=float).tolist(),
+                rec709_to_xyz=rec709_to_xyz_matrix().tolist(), white_xy=white_xy().tolist())
+
+
+def _write_json(path: Path, data: dict) -> None:
     tmp = path.with_suffix(".partial")
     tmp.write_text(json.dumps(data, indent=1))
     os.replace(tmp, path)
-    return str(path)
+
+
+def write_shader_tables(path=None, observer_path=None) -> str:
+    """(Re)write the baked tables (the shaders' and the observer's); returns their paths."""
+    path = Path(path or spectral_tables.PATH)
+    observer_path = Path(observer_path or spectral_tables.OBSERVER_PATH)
+    _write_json(path, {str(n): shader_tables(n) for n in SAMPLE_COUNTS})
+    _write_json(observer_path, observer_tables())
+    return f"{path}\n{observer_path}"
 
 
 if __name__ == "__main__":

@@ -2,9 +2,9 @@
 
 The fits here are short (a few free parameters, one thickness order): what is tested is the
 operator's path -- the target read or rendered, the fit in its own thread or at once, the
-result applied as a preset is, a cancel that changes nothing, and a Blender whose Python
-lacks SciPy told so.  How well fits match is tests/test_fit.py's and
-tests/test_principled_target.py's.
+result applied as a preset is, a cancel that changes nothing.  That the installed extension fits
+in a Python without SciPy or colour-science is tests/test_extension.py's.  How well fits match is
+tests/test_fit.py's and tests/test_principled_target.py's.
 """
 from __future__ import annotations
 
@@ -145,16 +145,6 @@ def test_esc_stops_the_modal_fit_with_nothing_changed():
     assert ("status_text_set", "Layered BRDF: stopping the fit...") in context.workspace.calls
     assert context.workspace.calls[-1] == ("status_text_set", None)
     assert state(mat) == before
-
-
-def test_without_scipy_the_operator_says_what_fitting_needs(monkeypatch):
-    obj, _ = layered_object()
-    assert bpy.ops.layered_brdf.fit_to_render.poll()
-    monkeypatch.setattr(fit_operator, "importable", lambda module: module != "scipy")
-    assert fit_operator.fitting_unavailable() == f"{fit_operator.NEEDS_MODULES} (missing: SciPy)"
-    assert not bpy.ops.layered_brdf.fit_to_render.poll()
-    with pytest.raises(RuntimeError, match="Fitting needs SciPy and colour-science in Blender's Python"):
-        bpy.ops.layered_brdf.fit_to_render()
 
 
 def test_the_panel_offers_the_fit_and_its_dialog_draws_the_operator_s_own_settings():

@@ -13,8 +13,6 @@ the tests) the operator fits at once.
 """
 from __future__ import annotations
 
-import importlib.util
-import sys
 import threading
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
@@ -40,29 +38,12 @@ from .principled_target import principled_materials, principled_views_of, start_
 from .sidecar_views import sidecar_views
 from .targets import object_problem, takes_layered_material
 
-FIT_MODULES = (("scipy", "SciPy"), ("colour", "colour-science"))
-NEEDS_MODULES = "Fitting needs SciPy and colour-science in Blender's Python"
 # The fit's options (:func:`..fit.solve.fit`): the start and three orders of the thickness
 # scan, 40 optimiser steps from each.
 FIT_OPTIONS = {"starts": 3, "steps_per_start": 40}
 TIMER_SECONDS = 0.2
 CURRENT = "CURRENT"  # start from the material's own values
 NO_MATERIAL = "__none__"  # the file holds no Principled material
-
-
-# ---------------------------------------------------------------------------
-# what the fit needs
-def importable(module: str) -> bool:
-    """Whether ``module`` can be imported here (found on the path; not imported by this)."""
-    return module in sys.modules or importlib.util.find_spec(module) is not None
-
-
-def fitting_unavailable() -> str | None:
-    """Why fitting cannot run in this Python (SciPy or colour-science missing), or None."""
-    missing = [label for module, label in FIT_MODULES if not importable(module)]
-    if missing:
-        return f"{NEEDS_MODULES} (missing: {', '.join(missing)})"
-    return None
 
 
 def sphere_target(target_views):
@@ -262,19 +243,9 @@ material of this file (Esc cancels)"""
 
     @classmethod
     def poll(cls, context):
-        if not takes_layered_material(getattr(context, "object", None)):
-            return False
-        reason = fitting_unavailable()
-        if reason is not None:
-            cls.poll_message_set(reason)
-            return False
-        return True
+        return takes_layered_material(getattr(context, "object", None))
 
     def invoke(self, context, event):
-        reason = fitting_unavailable()
-        if reason is not None:
-            self.report({"ERROR"}, reason)
-            return {"CANCELLED"}
         return context.window_manager.invoke_props_dialog(self, width=360)
 
     def draw(self, context):
@@ -328,10 +299,6 @@ material of this file (Esc cancels)"""
             else f"the material '{self.principled}'"
 
     def execute(self, context):
-        reason = fitting_unavailable()
-        if reason is not None:
-            self.report({"ERROR"}, reason)
-            return {"CANCELLED"}
         try:
             target, views, start = self._prepare(context)
         except (ParameterError, OSError) as e:
@@ -339,9 +306,6 @@ material of this file (Esc cancels)"""
             return {"CANCELLED"}
         except TargetError as e:
             self.report({"ERROR"}, f"Cannot fit to {self._target_name_shown()}: {e}")
-            return {"CANCELLED"}
-        except ImportError as e:
-            self.report({"ERROR"}, f"{NEEDS_MODULES} ({e})")
             return {"CANCELLED"}
         except RuntimeError as e:  # Blender could not render the target (a render already running...)
             self.report({"ERROR"}, f"Cannot render {self._target_name_shown()}: {e}")
@@ -405,9 +369,6 @@ material of this file (Esc cancels)"""
         job = self._job
         if isinstance(job.error, FitCancelled):
             self.report({"WARNING"}, f"Fit cancelled: '{self._target_name}' is unchanged")
-            return {"CANCELLED"}
-        if isinstance(job.error, ImportError):
-            self.report({"ERROR"}, f"{NEEDS_MODULES} ({job.error})")
             return {"CANCELLED"}
         if job.error is not None:
             e = job.error

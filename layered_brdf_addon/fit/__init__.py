@@ -6,6 +6,6 @@ evaluated by the numpy backend of the shading program: a target rendered by Cycl
 matched by what Cycles will render from the fitted parameters.  A reflectance table is
 matched by the film's mirror reflection (the amplitude step of the same program).
 
-Needs SciPy (``scipy.optimize.least_squares``) and colour-science (CIELAB, CIEDE2000);
-imports no bpy.
+Numpy alone (its own bounded least squares, :mod:`.least_squares`, and CIELAB/CIEDE2000 with
+the CIE tables baked, :mod:`.colour_space`), so it runs in Blender's own Python; imports no bpy.
 """

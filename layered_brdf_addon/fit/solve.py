@@ -3,11 +3,11 @@
 Interference colours repeat with thickness (each order of the film shows the sequence
 again), so a local optimiser started anywhere finds the nearest order, not the best one:
 the starts are the best few of a coarse scan over the mean thickness (the range's relative
-width kept), plus the start itself.  Each runs ``scipy.optimize.least_squares`` (trust
-region, bounds from the parameter table, ``soft_l1`` loss: a few pixels the model cannot
-reach, a clipped highlight or a speck, do not pull the fit), and the best result wins.
+width kept), plus the start itself.  Each runs :func:`.least_squares.least_squares` (bounded
+Levenberg-Marquardt in numpy, bounds from the parameter table, soft-L1 loss: a few pixels the
+model cannot reach, a clipped highlight or a speck, do not pull the fit), and the best result wins.
 
-The slopes are scipy's forward differences, but the parameter sets of a Jacobian's columns
+The slopes are forward differences (SciPy's steps), but the parameter sets of a Jacobian's columns
 (and the scan's candidates) are evaluated together: a sphere target shades them in one run
 of the shading program (``SphereTarget.predict_many``), whose numpy backend repeats the
 Python work of its many small steps on every run, however few the points.
@@ -23,13 +23,13 @@ import numpy as np
 from ..model.params import LayeredParams
 from . import colour_space
 from .free import FreeParameters, check_vary, default_vary, film_vary, search_range
+from .least_squares import least_squares
 
 THICKNESS_SCAN_NM = (20.0, 3000.0)
 THICKNESS_SCAN_STEPS = 28
 SCAN_HALF_WIDTHS = (0.1, 0.4)  # relative half-widths of the range scanned, besides the start's
 LOSS_SCALE = 2.0  # CIELAB units where soft_l1 turns from quadratic to linear
 GOOD_ENOUGH = 0.5  # mean CIEDE2000 below which no further start is tried (about a just-noticeable difference)
-X_SCALE = 1.0
 DIFF_STEP = 1e-3  # the slopes' forward-difference step, relative to the parameter (scipy's ``diff_step``)
 START_MARGIN = 0.05  # a start this far inside the bounds (of their width)
 
@@ -197,8 +197,6 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     each evaluation of the model; ``should_stop()`` returning True ends the fit with
     :class:`FitCancelled`.
     """
-    from scipy.optimize import least_squares
-
     t0 = time.perf_counter()
     uniform = getattr(target, "uniform_film", False)
     if uniform:
@@ -214,9 +212,8 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     firsts = thickness_starts(objective, start, starts, try_start) if {"d_min", "d_max"} & set(names) else [start]
     best, best_de, tried = None, np.inf, []
     for first in firsts:
-        sol = least_squares(objective, free.vector(first, START_MARGIN), jac=objective.jacobian, bounds=(lo, hi),
-                            loss="soft_l1", f_scale=LOSS_SCALE, x_scale=X_SCALE,
-                            max_nfev=steps_per_start)
+        sol = least_squares(objective, free.vector(first, START_MARGIN), objective.jacobian, (lo, hi),
+                            f_scale=LOSS_SCALE, max_nfev=steps_per_start)
         params = free.params(sol.x)
         de = objective.mean_delta_e(params)
         tried.append((first.d_min, first.d_max, de))
