@@ -110,6 +110,86 @@ def test_install_enable_use_and_disable_in_a_throwaway_repository(package, tmp_p
     assert r["leftovers"] == [], r["leftovers"]
 
 
+# Fit to Render in a Blender whose Python has none of the project's other dependencies: the
+# installed extension must bring what the fit needs (it needs numpy alone).
+NOT_IN_BLENDER = ("scipy", "colour", "OpenEXR", "OpenImageIO", "tmm", "tqdm", "matplotlib", "dask", "PIL",
+                  "layered_brdf_reference", "layered_brdf_addon")
+FIT_TRUTH = {"d_min": 260.0, "d_max": 430.0}
+
+
+@pytest.mark.slow
+def test_the_installed_extension_fits_to_a_render_without_scipy_or_colour_science(package, tmp_path):
+    user = tmp_path / "user"
+    user.mkdir()
+    env = {k: v for k, v in os.environ.items() if not k.startswith("BLENDER_")}
+    env["BLENDER_USER_RESOURCES"] = str(user)
+    out = tmp_path / "result.json"
+    proc = subprocess.run([sys.executable, __file__, "fit", str(package), str(out)], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    r = json.loads(out.read_text())
+    assert r["blocked_importable"] == [], r
+    assert r["result"] == ["FINISHED"], r
+    assert r["module_file"].startswith(str(user / "extensions" / REPO / EXT_ID))
+    assert r["layered"] and r["build"].startswith("nodes:")
+    # One sun shows the film's mean thickness (its order), less so how far it spreads.
+    assert r["fitted"]["d_min"] + r["fitted"]["d_max"] == pytest.approx(sum(FIT_TRUTH.values()), rel=0.1), r
+    assert r["fitted"] != r["start"]
+    assert r["loaded"] == [], r["loaded"]
+
+
+def _fit_child(zip_path: str, out: str) -> None:
+    """Installs the zip, renders a target with it (the files of ``layered-brdf render``), and fits the
+    active sphere's material to it with *Fit to Render...*, in a Python that cannot import SciPy,
+    colour-science, OpenEXR or the checkout's own packages."""
+    for name in NOT_IN_BLENDER:
+        sys.modules[name] = None  # import raises ImportError, as where it is not installed
+    sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != ROOT]
+    import importlib.util
+
+    import bpy
+
+    r = {"blocked_importable": [n for n in NOT_IN_BLENDER if sys.modules.get(n) is not None]}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.extensions.package_install_files(filepath=zip_path, repo=REPO, enable_on_install=True)
+    ext = sys.modules[PACKAGE]
+    r["module_file"] = ext.__file__
+
+    def own(name):
+        return importlib.import_module(f"{PACKAGE}.layered_brdf_addon.{name}")
+
+    scene, sidecar, model = own("blender.scene"), own("io.sidecar"), own("model")
+    values, fit_operator = own("blender.material_values"), own("blender.fit_operator")
+    sun = model.Sun(direction=(0.3, -0.55, 0.78), strength=3.0)
+    camera = scene.camera_for(1, 48)
+    [sphere] = scene.build_scene(scene.SceneSpec(camera=camera, sun=sun))
+    bpy.context.view_layer.objects.active = sphere
+    bpy.ops.layered_brdf.load_preset(preset="oil_slick")
+    mat = sphere.active_material
+    truth = values.params_of(mat).replace(thickness_mode="height", **FIT_TRUTH)
+    own("blender.sync").apply_to_object(sphere, truth)
+    stem = Path(out).with_name("target")
+    scene.render_to_exr(stem.with_suffix(".exr"))
+    sidecar.write_json(stem.with_suffix(".json"), {
+        "format": sidecar.SIDECAR_FORMAT, "version": 1, "scene": "reference", "params": truth.to_dict(),
+        "camera": sidecar.camera_to_dict(camera), "sun": sidecar.sun_to_dict(sun), "centers": [[0.0, 0.0, 0.0]],
+        "outputs": {"exr": stem.with_suffix(".exr"), "json": stem.with_suffix(".json")}})
+
+    start = truth.replace(d_min=150.0, d_max=600.0)
+    own("blender.sync").apply_to_object(sphere, start)
+    r["start"] = {"d_min": start.d_min, "d_max": start.d_max}
+    fit_operator.FIT_OPTIONS = {"starts": 1, "steps_per_start": 15, "vary": ("d_min", "d_max")}
+    r["result"] = sorted(bpy.ops.layered_brdf.fit_to_render(source="RENDER", filepath=str(stem.with_suffix(".json")),
+                                                           start="CURRENT"))
+    mat = sphere.active_material
+    fitted = values.params_of(mat)
+    r["fitted"] = {"d_min": fitted.d_min, "d_max": fitted.d_max}
+    r["layered"] = values.is_layered(mat)
+    r["build"] = mat["layered_brdf_build"]
+    r["loaded"] = sorted(n for n in NOT_IN_BLENDER if sys.modules.get(n) is not None)
+    Path(out).write_text(json.dumps(r))
+
+
 # --- the subprocess --------------------------------------------------------------------------
 def _child(zip_path: str, out: str) -> None:
     import importlib
@@ -180,4 +260,7 @@ def _child(zip_path: str, out: str) -> None:
 
 
 if __name__ == "__main__":
-    _child(sys.argv[1], sys.argv[2])
+    if sys.argv[1] == "fit":
+        _fit_child(sys.argv[2], sys.argv[3])
+    else:
+        _child(sys.argv[1], sys.argv[2])

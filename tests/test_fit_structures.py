@@ -137,3 +137,22 @@ def test_verify_renders_the_fit_and_its_figure_agrees_with_the_fit_s(tmp_path):
     assert abs(rendered - fitted) <= max(0.3, 0.1 * fitted), (fitted, rendered)
     assert doc["verify"]["pixels"] > 0 and "re-rendered: mean CIEDE2000" in run.stdout
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fit.json", "fit.png", "t.exr", "t.json", "t.png"]
+
+
+def test_verify_refuses_a_render_of_another_camera_before_the_fit(tmp_path, capsys, monkeypatch):
+    from layered_brdf_addon.model.sphere import OrthoCamera
+
+    camera = OrthoCamera(width=48, height=48)
+    write_render(tmp_path / "t", DIFFUSE_GLAZE, size=48)
+    side = json.loads((tmp_path / "t.json").read_text())
+    side["camera"]["ortho_scale"] = camera.ortho_scale * 1.5  # a closer view: 'render' repeats only its own camera
+    (tmp_path / "t.json").write_text(json.dumps(side))
+
+    def no_fit(*args, **kwargs):
+        raise AssertionError("the fit ran before --verify was refused")
+
+    monkeypatch.setattr(structures, "select_and_fit", no_fit)
+    monkeypatch.setattr(structures.solve, "fit", no_fit)
+    code, _, err = run_fit(tmp_path / "t.json", "--verify", "--output", tmp_path / "out" / "x", capsys=capsys)
+    assert code == 2 and "'verify'" in err and "whose camera is the reference scene's" in err, err
+    assert not (tmp_path / "out").exists()

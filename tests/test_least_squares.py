@@ -65,3 +65,16 @@ def test_the_budget_of_evaluations_is_kept_and_the_start_clipped_into_the_bounds
     assert sol.nfev == 5 and sol.reason == "max_nfev"
     assert np.all(np.abs(calls[0]) <= 2.0)
     assert np.all(np.isfinite(sol.x)) and np.all(np.abs(sol.x) <= 2.0)
+
+
+def test_a_parameter_on_its_bound_gives_a_value_inside_its_range():
+    from layered_brdf_addon.fit.free import FreeParameters, search_range
+    from layered_brdf_addon.model.presets import preset
+
+    names = ("e0", "e1", "d_min", "d_max")
+    free = FreeParameters(names, preset("oil_slick"))
+    lo, hi = free.bounds()
+    for x in (lo, hi):
+        p = free.params(x)
+        for name in names:
+            assert search_range(name)[0] <= getattr(p, name) <= search_range(name)[1]

@@ -4,8 +4,9 @@ sidecar ``STEM.json`` and beauty pass ``STEM.exr`` read back as a
 
 :func:`..io.sphere_render.read_sphere_render` reads and checks the render (``layered-brdf fit``
 reads its targets with it too); its refusal is the panel's :class:`~..fit.targets.TargetError`.
-The EXR is read with the OpenEXR module (the project's own environment) or, where that is
-missing, OpenImageIO (bundled with Blender).  Imports no bpy.
+The EXR is read with the OpenEXR module where it is installed (the project's own environment),
+else with :mod:`..io.exr_reader` (numpy alone: Blender's Python, the installed extension).
+Imports no bpy.
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from typing import Callable
 import numpy as np
 
 from ..io.codecs import exr_beauty
+from ..io.exr_reader import read_exr
 from ..io.sidecar import SidecarError, sidecar_path
 from ..io.sphere_render import read_sphere_render
 from ..fit.targets import SphereView, TargetError
@@ -26,31 +28,8 @@ def read_exr_beauty(path: str | os.PathLike) -> np.ndarray:
     try:
         import OpenEXR  # noqa: F401
     except ImportError:
-        return _beauty_with_openimageio(path)
+        return exr_beauty(path, read_exr(path))[0]  # ExrError says why a file cannot be read
     return exr_beauty(path)[0]
-
-
-def _beauty_with_openimageio(path) -> np.ndarray:
-    try:
-        import OpenImageIO as oiio
-    except ImportError:
-        raise TargetError("reading an EXR needs the OpenEXR or OpenImageIO Python module") from None
-    image = oiio.ImageInput.open(str(path))
-    if image is None:
-        raise TargetError(f"{path}: {oiio.geterror() or 'not an image OpenImageIO can read'}")
-    try:
-        subimage = 0
-        while image.seek_subimage(subimage, 0):  # a multilayer EXR: one part per pass
-            names = list(image.spec().channelnames)
-            for prefix in ("ViewLayer.Combined.", "Combined.", ""):
-                keys = [prefix + c for c in "RGB"]
-                if all(k in names for k in keys):
-                    pixels = image.read_image(subimage, 0, 0, len(names), "float")
-                    return np.asarray(pixels, dtype=np.float64)[..., [names.index(k) for k in keys]]
-            subimage += 1
-    finally:
-        image.close()
-    raise TargetError(f"{path} has no Combined RGB channels")
 
 
 def sidecar_views(path: str | os.PathLike, *, sphere: int = 0,

@@ -39,7 +39,7 @@ from ..model.params import LayeredParams
 from .fit_outputs import fit_record, output_document, reflectance_figure, sphere_figure, write_outputs
 from .fit_request import FitRequest
 from .fit_targets import load_principled_target, load_reflectance_target, load_render_target
-from .fit_verify import verify
+from .fit_verify import check_camera, verify
 from .options import EXIT_OK
 
 STEPS_PER_START = 40  # the optimiser's steps from each start
@@ -102,6 +102,8 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
             loaded = load_reflectance_target(source)
         else:
             loaded = load_principled_target(source, req.principled, guard, verbose=req.verbose)
+        if req.verify:
+            check_camera(loaded.record)
         guard.check()
         stop = lambda: guard.received is not None  # noqa: E731
         selection = None

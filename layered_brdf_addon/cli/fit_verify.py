@@ -9,7 +9,8 @@ temporary folder, removed afterwards; nothing of it is left beside the outputs.
 
 A target that is not a render of the reference scene (a gallery's tile, a reflectance table, a
 Principled BSDF material) cannot be re-rendered this way: :func:`check_verifiable` says so before
-the fit.
+the fit, and :func:`check_camera` (a render with a camera of its own) once the target is read, before
+the fit too.
 """
 from __future__ import annotations
 
@@ -39,11 +40,17 @@ def check_verifiable(source, tile: Any) -> None:
         raise ParameterError("verify", True, VERIFY_ALLOWED)
 
 
+def check_camera(loaded_record: dict) -> None:
+    """ParameterError naming ``verify`` unless the loaded render's camera is the reference scene's
+    (``render`` repeats no other): called once the target is read, before the fit."""
+    camera = read_sidecar(loaded_record["sidecar"])["camera"]
+    if camera_from_dict(camera) != OrthoCamera(width=camera["width"], height=camera["height"]):
+        raise ParameterError("verify", True, VERIFY_ALLOWED + " whose camera is the reference scene's")
+
+
 def render_arguments(sidecar: dict, params_file: Path, stem: Path) -> list[str]:
     """``render``'s arguments that repeat the target's render with the parameters of ``params_file``."""
     camera, sun = sidecar["camera"], sidecar["sun"]
-    if camera_from_dict(camera) != OrthoCamera(width=camera["width"], height=camera["height"]):
-        raise ParameterError("verify", True, VERIFY_ALLOWED + " whose camera is the reference scene's")
     return ["render", "--params", str(params_file), "--resolution", f"{camera['width']}x{camera['height']}",
             "--samples", str(sidecar.get("samples", 1)), "--seed", str(sidecar.get("seed", 0)),
             "--backend", str(sidecar.get("backend", "nodes")), "--sun", *(repr(float(c)) for c in sun["direction"]),

@@ -112,8 +112,10 @@ class FreeParameters:
 
     def params(self, x: Sequence[float]) -> LayeredParams:
         """The parameters at ``x`` (the base's others); a thickness range given upside down is
-        put right (``d_min`` and ``d_max`` are free alike)."""
-        values = {n: (math.exp(v) if self._log(n) else float(v)) for n, v in zip(self.names, x)}
+        put right (``d_min`` and ``d_max`` are free alike).  A value on a bound of the log scale is
+        kept inside the range (``exp(log(hi))`` may exceed ``hi`` by a rounding)."""
+        values = {n: (min(max(math.exp(v), search_range(n)[0]), search_range(n)[1]) if self._log(n) else float(v))
+                  for n, v in zip(self.names, x)}
         lo = values.get("d_min", self.base.d_min)
         hi = values.get("d_max", self.base.d_max)
         if lo > hi:
