@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from layered_brdf_addon.blender import fit_operator, lookdev, tables, ui
+from layered_brdf_addon.fit import structures
 from layered_brdf_addon.blender.material_values import is_layered, params_of, settings
 from layered_brdf_addon.blender.stored_keys import BUILD_KEY
 from layered_brdf_addon.blender.sync import apply_to_object
@@ -96,9 +97,10 @@ class RunningFit:
     Op = fit_operator.LAYERED_BRDF_OT_fit_to_render
     modal, cancel, _status, _end_progress, _finish = Op.modal, Op.cancel, Op._status, Op._end_progress, Op._finish
 
-    def __init__(self, mat, options):
-        self._job = fit_operator.FitJob(views_of(TRUTH), START, options).begin()
-        self._timer, self._total = "timer", fit_operator.expected_evaluations(START, **options)
+    def __init__(self, mat, options, start=START):
+        self._job = fit_operator.FitJob(views_of(TRUTH), start, options).begin()
+        self._timer = "timer"
+        self._total = None if start is None else fit_operator.expected_evaluations(start, **options)
         self._target_kind, self._target_pointer, self._target_name = "materials", mat.as_pointer(), mat.name
         self.reports = []
 
@@ -131,6 +133,33 @@ def test_the_modal_fit_shows_its_progress_and_applies_the_result():
     wm = [c[0] for c in context.window_manager.calls]
     assert wm[-2:] == ["event_timer_remove", "progress_end"] and set(wm[:-2]) <= {"progress_update"}
     assert context.workspace.calls[-1] == ("status_text_set", None)
+
+
+def test_choosing_the_structure_shows_its_stages_and_applies_the_closest(monkeypatch):
+    """With no start (the dialog's "Choose the Structure") the fit screens the structures and fits the
+    finalists; the status bar says which stage, the bar only moves forward, the closest is applied."""
+    _, mat = layered_object("soap_bubble")
+    pool = [c for c in structures.candidates(thickness_mode="height")
+            if c.preset in ("oil_slick", "soap_bubble", "fig4_parallel") and c.start.normal_mode == "parallel"
+            and c.start.lower_medium in ("water", "air", "custom")]
+    assert len(pool) == 3, [c.label for c in pool]
+    monkeypatch.setattr(structures, "candidates", lambda **kw: pool)
+    context = modal_context()
+    op = RunningFit(mat, {"starts": 1, "steps_per_start": 8}, start=None)
+    assert op.run(context) == {"FINISHED"}
+    fitted = params_of(mat)
+    assert (fitted.optics, fitted.lower_medium) == (TRUTH.optics, TRUTH.lower_medium)  # the oil film's structure
+    shares = [c[1] for c in context.window_manager.calls if c[0] == "progress_update"]
+    assert shares == sorted(shares) and all(0.0 <= x < 1.0 for x in shares)
+    texts = [c[1] for c in context.workspace.calls if c[0] == "status_text_set" and c[1]]
+    assert any("screening structure" in t for t in texts), texts
+
+
+def test_the_selection_s_share_of_the_bar_grows_with_its_stages():
+    stages = [f"screen {k}/45" for k in range(1, 46)] + [f"fit {k}/3" for k in range(1, 4)]
+    shares = [fit_operator.selection_share(s) for s in stages]
+    assert shares == sorted(shares) and shares[0] == 0.0 and shares[-1] < 1.0
+    assert fit_operator.selection_share("") == 0.0
 
 
 def test_esc_stops_the_modal_fit_with_nothing_changed():

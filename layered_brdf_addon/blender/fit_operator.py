@@ -21,7 +21,7 @@ import bpy
 from bpy.props import EnumProperty, IntProperty, StringProperty
 from bpy.types import Operator
 
-from ..fit import solve
+from ..fit import solve, structures
 from ..fit.environment import DEFAULT_HDRIS
 from ..fit.free import default_vary
 from ..fit.solve import FitCancelled
@@ -43,6 +43,8 @@ from .targets import object_problem, takes_layered_material
 FIT_OPTIONS = {"starts": 3, "steps_per_start": 40}
 TIMER_SECONDS = 0.2
 CURRENT = "CURRENT"  # start from the material's own values
+CHOOSE = "CHOOSE"  # no start: the fit chooses the structure (fit/structures.py), as ``layered-brdf fit`` without --start
+SCREEN_SHARE = 0.5  # of the progress bar given to screening the structures, the rest to fitting the finalists
 NO_MATERIAL = "__none__"  # the file holds no Principled material
 
 
@@ -115,6 +117,29 @@ def run_fit(target_views, start: LayeredParams, *, progress: Callable[[int], Non
                      **{**FIT_OPTIONS, **options})
 
 
+def run_selection(target_views, *, progress: Callable[[str, int], None] | None = None,
+                  should_stop: Callable[[], bool] | None = None, **options):
+    """The fit with no start: every structure screened, the best fitted in full
+    (:func:`..fit.structures.select_and_fit`, the thickness by height as the command line's); its
+    :class:`~..fit.structures.Selection`.  Touches no Blender data: it may run in any thread."""
+    options = {**FIT_OPTIONS, **options}
+    pool = structures.candidates(thickness_mode="height")
+    return structures.select_and_fit(sphere_target(target_views), pool, options.pop("vary", None),
+                                     progress=progress, should_stop=should_stop, **options)
+
+
+def selection_share(stage: str) -> float:
+    """How far a selection is at ``stage`` ("screen K/N", "fit K/N"): screening the K-th of N
+    structures fills :data:`SCREEN_SHARE` of the bar in N equal steps, fitting the K-th finalist the rest."""
+    kind, _, count = stage.partition(" ")
+    done, _, total = count.partition("/")
+    try:
+        share = (int(done) - 1) / max(int(total), 1)
+    except ValueError:
+        return 0.0
+    return SCREEN_SHARE * share if kind == "screen" else SCREEN_SHARE + (1.0 - SCREEN_SHARE) * share
+
+
 def fit_material_to(material, target_views: Sequence, start: LayeredParams | None = None, *,
                     progress: Callable[[int], None] | None = None, should_stop: Callable[[], bool] | None = None,
                     **options):
@@ -147,9 +172,10 @@ class FitJob:
     """A fit running in a background thread; the main thread reads its progress and may stop it."""
 
     target_views: list
-    start: LayeredParams
+    start: LayeredParams | None  # None: the fit chooses the structure
     options: dict = field(default_factory=dict)
     evaluations: int = 0
+    stage: str = ""  # with no start: "screen K/N" or "fit K/N"
     result: object = None
     error: BaseException | None = None
 
@@ -160,10 +186,17 @@ class FitJob:
     def _count(self, evaluations: int) -> None:
         self.evaluations = evaluations
 
+    def _hear(self, stage: str, evaluations: int) -> None:
+        self.stage, self.evaluations = stage, evaluations
+
     def _run(self) -> None:
         try:
-            self.result = run_fit(self.target_views, self.start, progress=self._count,
-                                  should_stop=self._stop.is_set, **self.options)
+            if self.start is None:
+                self.result = run_selection(self.target_views, progress=self._hear, should_stop=self._stop.is_set,
+                                            **self.options).result
+            else:
+                self.result = run_fit(self.target_views, self.start, progress=self._count,
+                                      should_stop=self._stop.is_set, **self.options)
         except BaseException as e:  # handed to the main thread, which reports it
             self.error = e
 
@@ -201,7 +234,8 @@ def _principled_items(self, context):
 
 
 def _start_items(self, context):
-    items = []
+    items = [(CHOOSE, "Choose the Structure", "Try every structure (optics, lower boundary, base, lower medium), "
+                                              "each at its best thickness order, and keep the closest (minutes)")]
     obj = getattr(context, "object", None)
     if obj is not None and layered_material_of(obj) is not None:
         items.append((CURRENT, "Current Values", "Start from the layered material's own values"))
@@ -275,7 +309,9 @@ material of this file (Esc cancels)"""
             raise ParameterError("material", self.principled, "a Principled BSDF material of this file")
         return mat
 
-    def _start_params(self, obj) -> LayeredParams:
+    def _start_params(self, obj) -> LayeredParams | None:
+        if self.start == CHOOSE:
+            return None
         if self.start == CURRENT:
             params = start_of(obj)
             if params is None:
@@ -317,7 +353,7 @@ material of this file (Esc cancels)"""
         if bpy.app.background or context.window is None:  # no event loop to wait in
             self._job.begin().wait()
             return self._finish(context)
-        self._total = expected_evaluations(start, **FIT_OPTIONS)
+        self._total = expected_evaluations(start, **FIT_OPTIONS) if start is not None else None
         wm = context.window_manager
         self._timer = wm.event_timer_add(TIMER_SECONDS, window=context.window)
         wm.modal_handler_add(self)
@@ -330,10 +366,16 @@ material of this file (Esc cancels)"""
     def _status(self, context) -> None:
         if self._job.stopping:
             text = "Layered BRDF: stopping the fit..."
+        elif self._total is None:  # choosing the structure
+            share = min(selection_share(self._job.stage), 0.99)
+            doing = self._job.stage.replace("screen", "screening structure").replace("fit", "fitting finalist")
+            text = (f"Layered BRDF: fitting '{self._target_name}', {doing or 'starting'} "
+                    f"(about {100 * share:.0f}%). Esc or right click cancels")
         else:
             share = min(self._job.evaluations / max(self._total, 1), 0.99)
             text = (f"Layered BRDF: fitting '{self._target_name}', {self._job.evaluations} evaluations "
                     f"(about {100 * share:.0f}%). Esc or right click cancels")
+        if not self._job.stopping:
             context.window_manager.progress_update(share)
         if context.workspace is not None:
             context.workspace.status_text_set(text)
