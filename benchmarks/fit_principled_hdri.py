@@ -5,7 +5,8 @@ fit to their reference-sphere renders (three suns, ``blender.principled_target``
 Principled material and the fitted layered material rendered by Cycles on the look-dev ball
 under each bundled HDRI named (Standard view transform, linear EXR); the mean CIEDE2000
 over the ball's pixels (those that differ from a render without the ball), colours on the
-scale of the Principled render's 99th percentile luminance.  Prints a table
+scale of the Principled render's 99th percentile luminance.  ``--select``: the fit chooses the
+structure (no start), as the command line and the panel do by default.  Prints a table
 (``--markdown`` for docs/fitting.md).
 """
 from __future__ import annotations
@@ -22,7 +23,7 @@ import numpy as np  # noqa: E402
 
 from layered_brdf_addon.blender import lookdev  # noqa: E402
 from layered_brdf_addon.blender import principled_target  # noqa: E402
-from layered_brdf_addon.blender.fit_operator import run_fit  # noqa: E402
+from layered_brdf_addon.blender.fit_operator import run_fit, run_selection  # noqa: E402
 from layered_brdf_addon.blender.material import apply_layered_material  # noqa: E402
 from layered_brdf_addon.blender.scene import render_to_file, reset_blender  # noqa: E402
 from layered_brdf_addon.fit import colour_space  # noqa: E402
@@ -71,6 +72,8 @@ def main(argv=None) -> None:
                     help="HDRIs whose reference-sphere renders join the three suns' in the fit (default: the "
                          "fit command's, " + " ".join(DEFAULT_HDRIS) + "; none: the suns only)")
     ap.add_argument("--only", nargs="*", default=list(CONVERSIONS))
+    ap.add_argument("--select", action="store_true",
+                    help="no start: the fit chooses the structure (as 'fit --principled' without --start)")
     ap.add_argument("--sheet", help="also write a PNG: per material, the Principled and the fitted ball "
                                     "under each HDRI")
     ap.add_argument("--markdown", action="store_true")
@@ -86,7 +89,11 @@ def main(argv=None) -> None:
             hdris = [lookdev.hdri_path(h) for h in args.fit_hdris]
             views = principled_target.principled_views_of(material, hdris=hdris)
             t0, cpu0 = time.perf_counter(), time.process_time()
-            result = run_fit(views, principled_target.start_for(preset(start), material))
+            if args.select:
+                selection = run_selection(views)
+                result, start = selection.result, selection.chosen.label
+            else:
+                result = run_fit(views, principled_target.start_for(preset(start), material))
             seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
             import bpy
 
@@ -101,7 +108,7 @@ def main(argv=None) -> None:
             rows.append((name, start, f"{result.mean_delta_e:.2f}", *(f"{e:.2f}" for e in errors),
                          f"{cpu:.0f} / {seconds:.0f}"))
     lights = "three suns" + "".join(f" + {h}" for h in args.fit_hdris)
-    header = ("material", "start", f"ΔE00 fitted ({lights})", *(f"ΔE00 ball, {h}" for h in args.hdris),
+    header = ("material", "structure chosen" if args.select else "start", f"ΔE00 fitted ({lights})", *(f"ΔE00 ball, {h}" for h in args.hdris),
               "fit CPU / wall s")
     print(table(header, rows, args.markdown))
     if args.sheet:
