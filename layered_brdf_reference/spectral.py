@@ -462,9 +462,7 @@ def interference_cutoff_nm(r1, tolerance_de: float = 1.0, modulation: float = 1.
     return interference_cutoff_optical_nm(float(tolerance_de), float(modulation), float(level)) / r
 
 
-# ----------------------------------------------------------------------------
-# Baked tables for the shaders (which have no colour-science):
-# layered_brdf_addon/model/data/spectral_tables.json (read by model/spectral_tables.py).
+# Baked tables for the shaders and the fit (no colour-science in Blender): model/data/*.json.
 def shader_tables(n: int) -> dict:
     """Wavelengths, the Cauchy matrix ``K`` (``r1(lambda_j) = K[j] . r1_rgb``) and the
     spectrum-to-Rec.709 matrix ``M`` of ``spectral_sampling(n)``, as lists."""
@@ -477,29 +475,24 @@ def shader_tables(n: int) -> dict:
 
 
 def observer_tables() -> dict:
-    """colour-science's CIE 1931 2 degree CMFs (its 1 nm table) and D65 (its 5 nm table) as
-    tabulated, with the Rec.709 -> XYZ matrix and white: what the fit's colour maths reads
-    (``spectral_tables.observer``), as lists."""
-    cmfs = colour.MSDS_CMFS[CMFS_NAME]
-    d65_sd = colour.SDS_ILLUMINANTS[ILLUMINANT_NAME]
+    """colour-science's CIE 1931 2 degree CMFs (its 1 nm table) and D65 (its 5 nm table) as tabulated,
+    the Rec.709 -> XYZ matrix and white: what the fit's colour maths reads (``spectral_tables.observer``)."""
+    cmfs, d65_sd = colour.MSDS_CMFS[CMFS_NAME], colour.SDS_ILLUMINANTS[ILLUMINANT_NAME]
     return dict(cmf_nm=np.asarray(cmfs.domain, dtype=float).tolist(), cmf=np.asarray(cmfs.values, dtype=float).tolist(),
                 d65_nm=np.asarray(d65_sd.domain, dtype=float).tolist(), d65=np.asarray(d65_sd.values, dtype=float).tolist(),
                 rec709_to_xyz=rec709_to_xyz_matrix().tolist(), white_xy=white_xy().tolist())
 
 
-def _write_json(path: Path, data: dict) -> None:
-    tmp = path.with_suffix(".partial")
-    tmp.write_text(json.dumps(data, indent=1))
-    os.replace(tmp, path)
-
-
 def write_shader_tables(path=None, observer_path=None) -> str:
-    """(Re)write the baked tables (the shaders' and the observer's); returns their paths."""
-    path = Path(path or spectral_tables.PATH)
-    observer_path = Path(observer_path or spectral_tables.OBSERVER_PATH)
-    _write_json(path, {str(n): shader_tables(n) for n in SAMPLE_COUNTS})
-    _write_json(observer_path, observer_tables())
-    return f"{path}\n{observer_path}"
+    """(Re)write the baked tables (the shaders' and the observer's), each whole or not at all; their paths."""
+    written = []
+    for where, data in ((path or spectral_tables.PATH, {str(n): shader_tables(n) for n in SAMPLE_COUNTS}),
+                        (observer_path or spectral_tables.OBSERVER_PATH, observer_tables())):
+        tmp = Path(where).with_suffix(".partial")
+        tmp.write_text(json.dumps(data, indent=1))
+        os.replace(tmp, where)
+        written.append(str(where))
+    return "\n".join(written)
 
 
 if __name__ == "__main__":

@@ -23,6 +23,7 @@ FTOL = 1e-8  # stop when a step lowers the cost by less than this share of it
 XTOL = 1e-8  # or moves x by less than this, relative to |x|
 GTOL = 1e-10  # or the projected gradient is this small
 DAMPING_START = 1e-3  # lambda's start (it multiplies D, so it has no unit)
+DAMPING_CEILING = 1e12  # a step rejected at this damping ends the search
 DAMPING_FLOOR = 1e-12  # the smallest diagonal D takes, relative to the largest
 
 
@@ -99,7 +100,7 @@ def least_squares(fun: Callable[[np.ndarray], np.ndarray], x0, jac: Callable[[np
                     return Solution(x, cost, nfev, njev, "xtol")
                 break
             damping, growth = damping * growth, growth * 2.0
-            if np.linalg.norm(moved) <= XTOL * (XTOL + np.linalg.norm(x)):
+            if damping > DAMPING_CEILING:  # no step, however short, lowers the cost: a minimum
                 return Solution(x, cost, nfev, njev, "xtol")
             if nfev >= max_nfev:
                 return Solution(x, cost, nfev, njev, "max_nfev")

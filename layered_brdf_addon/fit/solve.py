@@ -27,6 +27,7 @@ from .least_squares import least_squares
 
 THICKNESS_SCAN_NM = (20.0, 3000.0)
 THICKNESS_SCAN_STEPS = 28
+INDEX_SCAN_FACTORS = (0.88, 1.14)  # the layer's indices scanned too, where free: their refraction moves the colours
 SCAN_HALF_WIDTHS = (0.1, 0.4)  # relative half-widths of the range scanned, besides the start's
 LOSS_SCALE = 2.0  # CIELAB units where soft_l1 turns from quadratic to linear
 GOOD_ENOUGH = 0.5  # mean CIEDE2000 below which no further start is tried (about a just-noticeable difference)
@@ -162,10 +163,12 @@ def _soft_l1(r: np.ndarray) -> float:
 
 
 def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
-                     with_start: bool = True) -> list[LayeredParams]:
+                     with_start: bool = True, index_scan: bool = True) -> list[LayeredParams]:
     """The start (unless not ``with_start``) and the ``count`` best thickness ranges of a coarse scan
     (local minima of the loss along the mean thickness, best first), at the start's relative width and
-    at :data:`SCAN_HALF_WIDTHS`."""
+    at :data:`SCAN_HALF_WIDTHS`; with ``index_scan``, where the layer's three indices are free, at the
+    start's indices scaled by :data:`INDEX_SCAN_FACTORS` too (a film of another index shows the same
+    colours at another thickness, but refracts, and so tilts its colours, otherwise)."""
     lo, hi = start.d_min, start.d_max
     mids = np.geomspace(*THICKNESS_SCAN_NM, THICKNESS_SCAN_STEPS)
     if getattr(objective.target, "uniform_film", False):
@@ -174,6 +177,9 @@ def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
         half = min(max((hi - lo) / max(hi + lo, 1e-9), 0.0), 0.9)
         halves = sorted({round(half, 3), *SCAN_HALF_WIDTHS})
         candidates = [start.replace(d_min=m * (1 - h), d_max=m * (1 + h)) for h in halves for m in mids]
+        if index_scan and {"r1_r", "r1_g", "r1_b"} <= set(objective.free.names):
+            candidates += [c.replace(r1_r=c.r1_r * f, r1_g=c.r1_g * f, r1_b=c.r1_b * f)
+                           for f in INDEX_SCAN_FACTORS for c in candidates[:len(mids) * len(halves)]]
     losses = np.array([_soft_l1(r) for r in objective.residuals([objective.free.vector(p, START_MARGIN)
                                                                  for p in candidates])])
     n = len(mids)
@@ -185,7 +191,8 @@ def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
 
 def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, starts: int = 3,
         steps_per_start: int = 40, progress: Callable[[int], None] | None = None,
-        should_stop: Callable[[], bool] | None = None, try_start: bool = True) -> FitResult:
+        should_stop: Callable[[], bool] | None = None, try_start: bool = True,
+        index_scan: bool = True) -> FitResult:
     """Parameters of ``start``'s modes whose closure form best matches ``target``.
 
     ``vary``: the free parameters (default :func:`~.free.default_vary`); the others keep
@@ -193,7 +200,8 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     besides ``start`` (when the thickness is free), unless one already matches within
     :data:`GOOD_ENOUGH`; ``steps_per_start``: the optimiser's steps from each (each step
     evaluates the model once per free parameter for the slopes, and once more); ``try_start=False``: the
-    scan's orders only, not ``start``'s own thickness.  ``progress(evaluations)`` is called at
+    scan's orders only, not ``start``'s own thickness; ``index_scan=False``: the scan keeps the start's
+layer indices (:func:`thickness_starts`).  ``progress(evaluations)`` is called at
     each evaluation of the model; ``should_stop()`` returning True ends the fit with
     :class:`FitCancelled`.
     """
@@ -209,7 +217,8 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     free = FreeParameters(names, start)
     objective = _Objective(target, free, progress, should_stop)
     lo, hi = free.bounds()
-    firsts = thickness_starts(objective, start, starts, try_start) if {"d_min", "d_max"} & set(names) else [start]
+    thickness_free = {"d_min", "d_max"} & set(names)
+    firsts = thickness_starts(objective, start, starts, try_start, index_scan) if thickness_free else [start]
     best, best_de, tried = None, np.inf, []
     for first in firsts:
         sol = least_squares(objective, free.vector(first, START_MARGIN), objective.jacobian, (lo, hi),

@@ -187,7 +187,7 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
     for k, c in enumerate(pool):
         stage = f"screen {k + 1}/{len(pool)}"
         result = solve.fit(small, c.start, vary, starts=SCREEN_ORDERS, steps_per_start=SCREEN_STEPS,
-                           progress=hearing(stage), should_stop=should_stop, try_start=False)
+                           progress=hearing(stage), should_stop=should_stop, try_start=False, index_scan=False)
         c.screen_delta_e, c.start = result.mean_delta_e, result.params
         total += result.evaluations
     chosen, best = None, None
