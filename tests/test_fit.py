@@ -126,3 +126,15 @@ def test_a_target_that_cannot_be_fitted_says_why():
         SphereTarget([SphereView(view.image[:10], CAMERA, view.sun)])
     with pytest.raises(TargetError, match="no image"):
         SphereTarget([])
+
+
+def test_a_noise_fit_that_passes_through_a_uniform_film_keeps_the_target_s_statistics():
+    """A noise start whose range closes (d_min = d_max: the plan renders a uniform film) is still compared
+    by the target's statistics, not pixel by pixel (the rows would not line up)."""
+    from layered_brdf_addon.fit.solve import model_features, features_observed
+
+    start = preset("glazed_clay")
+    assert start.thickness_mode == "noise"
+    target = SphereTarget(views_of(start.replace(thickness_mode="height")))  # any image: its statistics are compared
+    closed = start.replace(d_min=80.0, d_max=80.0)
+    assert model_features(target, closed).shape == features_observed(target, start).shape

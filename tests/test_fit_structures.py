@@ -156,3 +156,27 @@ def test_verify_refuses_a_render_of_another_camera_before_the_fit(tmp_path, caps
     code, _, err = run_fit(tmp_path / "t.json", "--verify", "--output", tmp_path / "out" / "x", capsys=capsys)
     assert code == 2 and "'verify'" in err and "whose camera is the reference scene's" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_target_no_structure_can_show_is_said_so_and_the_closest_fit_written(tmp_path, capsys):
+    """Speckles of saturated colour, pixel by pixel, that no lighting of a film makes: the fit writes
+    its closest result, with its figure, and says (stderr and OUT.json) that it is far."""
+    size = 24
+    pick = np.random.default_rng(11).integers(0, 3, (size, size))
+    image = np.where(pick[..., None] == np.arange(3), 0.8, 0.0)
+    write_render(tmp_path / "t", DIFFUSE_GLAZE, size=size, image=image)
+    code, _, err = run_fit(tmp_path / "t.json", "--start", "glazed_clay", "--starts", "1", "--output",
+                           tmp_path / "far", capsys=capsys)
+    assert code == 0, err
+    doc = json.loads((tmp_path / "far.json").read_text())
+    figure = doc["fit"]["mean_delta_e_2000"]
+    assert figure > structures.FAR_DELTA_E
+    assert "the start's structure does not come within 5 CIEDE2000" in doc["fit"]["note"]
+    assert f"{figure:.2f}" in doc["fit"]["note"] and "fit: warning:" in err and "without --start" in err
+    assert (tmp_path / "far.png").is_file()
+    LayeredParams.from_dict(doc["params"])
+
+
+def test_a_close_fit_has_no_note():
+    assert structures.far_fit_note(0.4, True) is None and structures.far_fit_note(5.0, False) is None
+    assert "no structure tried comes within 5" in structures.far_fit_note(7.5, True)

@@ -427,4 +427,7 @@ material of this file (Esc cancels)"""
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         self.report({"INFO"}, fit_report(job.result, mat.name))
+        note = structures.far_fit_note(job.result.mean_delta_e, job.start is None, "with 'Choose the Structure'")
+        if note is not None:
+            self.report({"WARNING"}, f"'{mat.name}': {note}")
         return {"FINISHED"}

@@ -120,6 +120,9 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
         if req.verify:
             record_extra["verify"] = verify(loaded.target, loaded.record, result.params, guard)
         record = {**fit_record(result, loaded, dict(req.start_record), argv, selection), **record_extra}
+        note = structures.far_fit_note(record["mean_delta_e_2000"], selection is not None)
+        if note is not None:
+            record["note"] = note
         draw = reflectance_figure if source.kind == "reflectance" else sphere_figure
         figure = draw(loaded.target, result.params, record["mean_delta_e_2000"],
                       structure=selection.chosen.label if selection is not None else None)
@@ -129,6 +132,8 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
         print(structures_table(selection))
     print(f"fit: mean CIEDE2000 {record['mean_delta_e_2000']:.3f}, {result.seconds:.1f} s, {result.evaluations} "
           f"evaluations; wrote {paths.json}, {paths.png}")
+    if note is not None:
+        print(f"fit: warning: {note}", file=sys.stderr)
     if "verify" in record_extra:
         v = record_extra["verify"]
         print(f"re-rendered: mean CIEDE2000 {v['mean_delta_e_2000']:.3f} over the sphere's {v['pixels']} pixels "

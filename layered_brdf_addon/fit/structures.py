@@ -43,6 +43,7 @@ SCREEN_PIXELS = 240  # the screening sample's pixels (every view together)
 SCREEN_STEPS = 6  # optimiser steps from the scan's best order, per candidate
 SCREEN_ORDERS = 1  # the scan's orders tried per candidate
 FINALISTS = 3
+FAR_DELTA_E = 5.0  # a best fit this far from its target: the layered model does not show what it shows
 FINALIST_MARGIN = 1.25  # a candidate whose screening figure is within this factor of the best's is a finalist too
 NORMAL_MODES = ("parallel", "tilted", "correlated")
 TILT_START_DEG = 6.0  # a tilted candidate's start where its preset's lower boundary is parallel
@@ -203,3 +204,15 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
             chosen, best = c, result
     pool.sort(key=lambda c: (c.figure(), c.screen_delta_e))
     return Selection(replace(best, seconds=time.perf_counter() - t0, evaluations=total), chosen, pool)
+
+
+def far_fit_note(figure: float, selected: bool, how_to_select: str = "without --start") -> str | None:
+    """What to tell the user when the best fit is more than :data:`FAR_DELTA_E` from its target (its
+    mean CIEDE2000 ``figure``; ``selected``: every structure was tried, else the start's only, and
+    ``how_to_select`` says how to try them all), or None."""
+    if not figure > FAR_DELTA_E:
+        return None
+    who = "no structure tried comes" if selected else "the start's structure does not come"
+    return (f"{who} within {FAR_DELTA_E:g} CIEDE2000 of the target (the closest: {figure:.2f}): the layered "
+            "model does not show what the target shows; the closest fit is written"
+            + ("" if selected else f" ({how_to_select} the fit tries every structure)"))

@@ -148,8 +148,10 @@ class SphereTarget:
     def matches_statistics(self, params: LayeredParams) -> bool:
         """Whether ``params`` put the thickness in a noise pattern: numpy does not evaluate
         Blender's noise, so the fit matches colour statistics of pixels seen alike instead
-        of pixels (the noise's range through its value distribution, not its pattern)."""
-        return plan_effects(params).thickness == "noise"
+        of pixels (the noise's range through its value distribution, not its pattern).  The mode
+        declared, not the plan's effect: a fit may pass through a range of zero width, which the plan
+        renders as a uniform film, and its rows must stay those of the target's statistics."""
+        return params.thickness_mode == "noise"
 
     def features(self, params: LayeredParams) -> np.ndarray:
         """What a fit compares, in CIELAB: every sampled pixel's colour, or for a noise
