@@ -22,6 +22,7 @@ from layered_brdf_addon.cli.requests import request_from_options
 from layered_brdf_addon.io.sidecar import SIDECAR_FORMAT, SIDECAR_VERSION, camera_to_dict, sun_to_dict, write_json
 from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.cycles_closures import closure_shading
+from layered_brdf_addon.fit.targets import SphereTarget, SphereView
 from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.presets import preset
 from layered_brdf_addon.model.sphere import OrthoCamera, Sun, render_spheres, sphere_geometry
@@ -84,11 +85,12 @@ def files_under(folder: Path) -> list[str]:
 
 
 def image_delta_e(target_image: np.ndarray, params: LayeredParams, size: int, sun: Sun = Sun()) -> np.ndarray:
-    """CIEDE2000 of every sphere pixel: the target against numpy's render of ``params``."""
+    """CIEDE2000 of every sphere pixel: the target against numpy's render of ``params``, on the
+    white the fit measures the target by (as ``fit --verify`` compares a re-render)."""
     camera = OrthoCamera(width=size, height=size)
     mask = sphere_geometry(camera).mask
     fitted = render_spheres([params], camera, sun, shading=closure_shading)[0]
-    white = colour_space.white_of(target_image[mask])
+    white = SphereTarget([SphereView(target_image, camera, sun)]).white_y
     return colour_space.delta_e_2000(colour_space.lab(np.maximum(target_image[mask], 0.0), white),
                                      colour_space.lab(fitted[mask], white))
 

@@ -180,3 +180,29 @@ def test_a_target_no_structure_can_show_is_said_so_and_the_closest_fit_written(t
 def test_a_close_fit_has_no_note():
     assert structures.far_fit_note(0.4, True) is None and structures.far_fit_note(5.0, False) is None
     assert "no structure tried comes within 5" in structures.far_fit_note(7.5, True)
+
+
+@pytest.mark.slow
+def test_a_render_whose_thickness_is_noise_is_fitted_with_a_noise_pattern(tmp_path):
+    """fig3_thin_film's film follows Blender's noise over the whole sphere: no height fit of its structure
+    comes within 1 CIEDE2000, so the fit tries a noise thickness and keeps it, its statistics closer to the
+    target's than the height fit's; both figures are in the record."""
+    from layered_brdf_addon.cli.fit_targets import Source, load_render_target
+    from test_fit_cli import run_cli
+
+    made = run_cli("render", "--preset", "fig3_thin_film", "--resolution", "48", "--output", tmp_path / "t",
+                   cwd=tmp_path)
+    assert made.returncode == 0, made.stderr
+    target = load_render_target(Source("render", tmp_path / "t.json", "t"), None).target
+    pool = [c for c in candidates(thickness_mode="height")
+            if c.preset == "fig3_old_metal" and c.start.normal_mode in ("parallel", "tilted")
+            and c.start.tilt_azimuth == preset("fig3_old_metal").tilt_azimuth]
+    assert len(pool) == 2
+    selection = select_and_fit(target, pool, starts=1, try_noise=True)
+    height = [c for c in selection.candidates if c.statistics is not None and c.start.thickness_mode == "height"]
+    assert len(height) == 1 and height[0].figure() > structures.NOISE_TRIAL_DELTA_E
+    assert selection.chosen.start.thickness_mode == "noise" and selection.chosen is selection.candidates[0]
+    assert selection.chosen.statistics < structures.NOISE_MARGIN * height[0].statistics
+    assert selection.result.params.thickness_mode == "noise" and "thickness noise" in selection.chosen.label
+    records = selection.to_record()
+    assert records[0]["thickness_mode"] == "noise" and records[0]["statistics_figure"] is not None

@@ -118,14 +118,15 @@ def run_fit(target_views, start: LayeredParams, *, progress: Callable[[int], Non
 
 
 def run_selection(target_views, *, progress: Callable[[str, int], None] | None = None,
-                  should_stop: Callable[[], bool] | None = None, **options):
+                  should_stop: Callable[[], bool] | None = None, try_noise: bool = False, **options):
     """The fit with no start: every structure screened, the best fitted in full
-    (:func:`..fit.structures.select_and_fit`, the thickness by height as the command line's); its
+    (:func:`..fit.structures.select_and_fit`, the thickness by height as the command line's, or for a
+    render a noise pattern where height stays far: ``try_noise``); its
     :class:`~..fit.structures.Selection`.  Touches no Blender data: it may run in any thread."""
     options = {**FIT_OPTIONS, **options}
     pool = structures.candidates(thickness_mode="height")
     return structures.select_and_fit(sphere_target(target_views), pool, options.pop("vary", None),
-                                     progress=progress, should_stop=should_stop, **options)
+                                     progress=progress, should_stop=should_stop, try_noise=try_noise, **options)
 
 
 def selection_share(stage: str) -> float:
@@ -176,6 +177,7 @@ class FitJob:
     options: dict = field(default_factory=dict)
     evaluations: int = 0
     stage: str = ""  # with no start: "screen K/N" or "fit K/N"
+    try_noise: bool = False  # with no start: a noise thickness may be chosen (a render's target)
     result: object = None
     error: BaseException | None = None
 
@@ -193,7 +195,7 @@ class FitJob:
         try:
             if self.start is None:
                 self.result = run_selection(self.target_views, progress=self._hear, should_stop=self._stop.is_set,
-                                            **self.options).result
+                                            try_noise=self.try_noise, **self.options).result
             else:
                 self.result = run_fit(self.target_views, self.start, progress=self._count,
                                       should_stop=self._stop.is_set, **self.options)
@@ -349,7 +351,7 @@ material of this file (Esc cancels)"""
         self._target_kind = "objects" if isinstance(target, bpy.types.Object) else "materials"
         self._target_pointer = target.as_pointer()
         self._target_name = target.name
-        self._job = FitJob(views, start, dict(FIT_OPTIONS))
+        self._job = FitJob(views, start, dict(FIT_OPTIONS), try_noise=self.source == "RENDER")
         if bpy.app.background or context.window is None:  # no event loop to wait in
             self._job.begin().wait()
             return self._finish(context)

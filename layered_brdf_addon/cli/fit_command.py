@@ -87,7 +87,8 @@ def select_with_progress(target, req: FitRequest, should_stop: Callable[[], bool
 
     try:
         return structures.select_and_fit(target, req.pool, req.vary, starts=req.starts,
-                                         steps_per_start=STEPS_PER_START, progress=progress, should_stop=should_stop)
+                                         steps_per_start=STEPS_PER_START, progress=progress, should_stop=should_stop,
+                                         try_noise=req.try_noise)
     finally:
         bar.close()
 

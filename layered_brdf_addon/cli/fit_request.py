@@ -54,6 +54,7 @@ class FitRequest:
     inputs: tuple[tuple[str, Path], ...] = field(default_factory=tuple)  # files no output may replace
     pool: tuple[Candidate, ...] = ()  # the structures the fit chooses among (none: the start's is kept)
     verify: bool = False  # render the fit as the target was and compare
+    try_noise: bool = False  # the pool's height thickness may give way to a noise pattern (a render, not pinned)
 
 
 def source_of(given: Mapping[str, Any]) -> Source:
@@ -149,4 +150,5 @@ def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
     return FitRequest(source=source, start=start, start_record=record, paths=paths, vary=given.get("vary"),
                       starts=given.get("starts", STARTS_DEFAULT), tile=given.get("tile"), principled=principled,
                       progress=given.get("progress", True), verbose=given.get("verbose", False), inputs=tuple(inputs),
-                      pool=pool, verify=given.get("verify", False))
+                      pool=pool, verify=given.get("verify", False),
+                      try_noise=bool(pool) and source.kind == "render" and "thickness_mode" not in given)

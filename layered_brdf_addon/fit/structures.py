@@ -19,9 +19,15 @@ explain the target and keeps the best:
    small sample.
 3. **The full fit** (:func:`select_and_fit`) of the best :data:`FINALISTS` (and any other within
    :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel; the lowest
-   mean CIEDE2000 over every pixel of the sphere wins (over the sample where numpy cannot
-   compute every pixel: a noise thickness).  Every candidate's figures are returned for the
-   report.
+   mean CIEDE2000 over every pixel of the sphere wins.  Every candidate's figures are returned
+   for the report.
+4. **The thickness pattern**: the candidates' thickness follows the surface's height (numpy
+   reproduces it pixel by pixel).  Where the best of them stays over :data:`NOISE_TRIAL_DELTA_E`
+   and the pattern is free (``try_noise``), its structure (unless its lower boundary follows the
+   thickness's slope, which numpy cannot take of Blender's noise) is fitted again with a noise thickness,
+   through the statistics of pixels seen alike (numpy does not evaluate Blender's noise), and the
+   noise wins where its statistics are closer to the target's than the height fit's by
+   :data:`NOISE_MARGIN` (:meth:`~.targets.SphereTarget.statistics_figure`: both on the same rows).
 
 Nothing here imports bpy.
 """
@@ -44,6 +50,8 @@ SCREEN_STEPS = 6  # optimiser steps from the scan's best order, per candidate
 SCREEN_ORDERS = 1  # the scan's orders tried per candidate
 FINALISTS = 3
 FAR_DELTA_E = 5.0  # a best fit this far from its target: the layered model does not show what it shows
+NOISE_TRIAL_DELTA_E = 1.0  # a best height fit over this tries a noise thickness too (where the pattern is free)
+NOISE_MARGIN = 0.8  # ... which wins where its statistics figure is below this share of the height fit's
 FINALIST_MARGIN = 1.25  # a candidate whose screening figure is within this factor of the best's is a finalist too
 NORMAL_MODES = ("parallel", "tilted", "correlated")
 TILT_START_DEG = 6.0  # a tilted candidate's start where its preset's lower boundary is parallel
@@ -62,6 +70,7 @@ class Candidate:
     screen_delta_e: float = float("inf")
     delta_e: float | None = None  # the full fit's mean CIEDE2000 over its sample (finalists only)
     image_delta_e: float | None = None  # ... and over every pixel of the sphere, where numpy computes them
+    statistics: float | None = None  # its statistics figure, where a noise thickness was tried against it
     result: solve.FitResult | None = field(default=None, repr=False)
 
     def modes(self) -> dict[str, str]:
@@ -71,7 +80,9 @@ class Candidate:
         return {"label": self.label, "modes": self.modes(), "from_preset": self.preset,
                 "screen_mean_delta_e_2000": float(self.screen_delta_e),
                 "mean_delta_e_2000": None if self.delta_e is None else float(self.delta_e),
-                "image_mean_delta_e_2000": None if self.image_delta_e is None else float(self.image_delta_e)}
+                "image_mean_delta_e_2000": None if self.image_delta_e is None else float(self.image_delta_e),
+                "thickness_mode": self.start.thickness_mode,
+                "statistics_figure": None if self.statistics is None else float(self.statistics)}
 
     def figure(self) -> float:
         """What ranks a finalist: its figure over every pixel where there is one, else over its sample."""
@@ -91,7 +102,8 @@ def _label(name: str, p: LayeredParams) -> str:
     turned = f" (azimuth {p.tilt_azimuth:g} deg)" if p.normal_mode == "tilted" else ""
     base = {"none": "", "transparent": ", see-through", "metal": ", metal base"}[p.base_layer]
     diffuse = ", diffuse base" if p.kd > 0.0 else ""
-    return f"{p.optics} optics{medium}, lower boundary {p.normal_mode}{turned}{base}{diffuse}, from {name}"
+    noise = ", thickness noise" if p.thickness_mode == "noise" else ""
+    return f"{p.optics} optics{medium}, lower boundary {p.normal_mode}{turned}{base}{diffuse}{noise}, from {name}"
 
 
 def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | None = None) -> list[Candidate]:
@@ -168,10 +180,11 @@ def finalists(screened: Sequence[Candidate]) -> list[Candidate]:
 
 def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None = None, *, starts: int = 3,
                    steps_per_start: int = 40, progress: Callable[[str, int], None] | None = None,
-                   should_stop: Callable[[], bool] | None = None) -> Selection:
+                   should_stop: Callable[[], bool] | None = None, try_noise: bool = False) -> Selection:
     """Screen every candidate of ``pool`` on a sample of ``target``, fit the finalists on all of it,
-    keep the lowest mean CIEDE2000.  ``progress(stage, evaluations)`` hears each evaluation, the
-    stage ``"screen K/N"`` or ``"fit K/N"``; ``should_stop()`` ends it (:class:`~.solve.FitCancelled`)."""
+    keep the lowest mean CIEDE2000; with ``try_noise``, a noise thickness for the best where it stays
+    far (the module's step 4).  ``progress(stage, evaluations)`` hears each evaluation, the stage
+    ``"screen K/N"`` or ``"fit K/N"``; ``should_stop()`` ends it (:class:`~.solve.FitCancelled`)."""
     t0 = time.perf_counter()
     total = 0
     small = screening_target(target)
@@ -193,6 +206,7 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
         total += result.evaluations
     chosen, best = None, None
     last = finalists(pool)
+    noise = try_noise and isinstance(target, SphereTarget)
     for k, c in enumerate(last):
         result = solve.fit(target, c.start, vary, starts=starts, steps_per_start=steps_per_start,
                            progress=hearing(f"fit {k + 1}/{len(last)}"), should_stop=should_stop)
@@ -202,7 +216,20 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
         total += result.evaluations
         if chosen is None or c.figure() < chosen.figure():
             chosen, best = c, result
-    pool.sort(key=lambda c: (c.figure(), c.screen_delta_e))
+    if (noise and chosen.figure() > NOISE_TRIAL_DELTA_E and chosen.start.thickness_mode != "noise"
+            and chosen.start.normal_mode != "correlated"):  # numpy has no slope of Blender's noise to tilt by
+        start = best.params.replace(thickness_mode="noise")
+        c = Candidate(_label(chosen.preset, start), start, chosen.preset, screen_delta_e=chosen.screen_delta_e)
+        # one more full fit, known only now: the stage's count grows by one (the bar still only moves on)
+        result = solve.fit(target, start, vary, starts=starts, steps_per_start=steps_per_start,
+                           progress=hearing(f"fit {len(last) + 1}/{len(last) + 1}"), should_stop=should_stop)
+        total += result.evaluations
+        c.delta_e, c.result = result.mean_delta_e, result
+        c.statistics, chosen.statistics = target.statistics_figure(result.params), target.statistics_figure(best.params)
+        pool.append(c)
+        if c.statistics < NOISE_MARGIN * chosen.statistics:
+            chosen, best = c, result
+    pool.sort(key=lambda c: (c is not chosen, c.figure(), c.screen_delta_e))
     return Selection(replace(best, seconds=time.perf_counter() - t0, evaluations=total), chosen, pool)
 
 

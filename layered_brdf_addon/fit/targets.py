@@ -186,6 +186,19 @@ class SphereTarget:
         """The rows of :meth:`features` that are colours (a CIEDE2000 reads them)."""
         return slice(None) if not self.matches_statistics(params) else slice(0, self._group_count())
 
+    def statistics_figure(self, params: LayeredParams) -> float:
+        """How far ``params`` are from the target in the statistics a noise thickness is fitted by,
+        whatever their thickness: the mean CIELAB distance between the target's and their pixel
+        groups' mean colours and spreads, weighted as a noise fit weighs them.  A height and a noise
+        thickness compared on the same rows."""
+        observed = self._group_stats(colour_space.lab(self.observed, self.white_y)[:, None, :], np.ones(1))
+        if self.matches_statistics(params):
+            model = self.features(params)
+        else:
+            model = self._group_stats(colour_space.lab(self.predict(params), self.white_y)[:, None, :], np.ones(1))
+        weights = self.feature_weights(params.replace(thickness_mode="noise"))
+        return float(np.average(np.linalg.norm(model - observed, axis=-1), weights=weights))
+
     def _levels_lab(self, params: LayeredParams) -> np.ndarray:
         """(N, levels, 3): the pixels' colours at each of the noise's thickness levels, the
         levels shaded together (a stack of thicknesses, one row per level)."""
