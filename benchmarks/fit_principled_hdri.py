@@ -90,7 +90,7 @@ def main(argv=None) -> None:
             views = principled_target.principled_views_of(material, hdris=hdris)
             t0, cpu0 = time.perf_counter(), time.process_time()
             if args.select:
-                selection = run_selection(views)
+                selection = run_selection(views, surface=principled_target.surface_of(material))
                 result, start = selection.result, selection.chosen.label
             else:
                 result = run_fit(views, principled_target.start_for(preset(start), material))

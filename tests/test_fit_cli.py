@@ -464,6 +464,9 @@ def test_a_principled_material_is_fitted(tmp_path, principled_blend, material, o
     assert record["target"]["kind"] == "principled" and len(record["target"]["suns"]) == 3
     assert record["target"]["hdris"] == ["forest.exr"]
     assert record["target"]["material"] == material
+    assert record["target"]["surface"] == {"TitaniumFilm": "metal", "PearlFilm": "dielectric"}[material]
+    if not options:  # no start: only the structures of the material's own surface (a diffuse base) were tried
+        assert record["structures"] and {s["modes"]["base_layer"] for s in record["structures"]} == {"none"}
     assert record["mean_delta_e_2000"] <= PRINCIPLED_DELTA_E
     print(f"\nPrincipled {material} fitted: {record['mean_delta_e_2000']:.3f}, fit {record['seconds']:.1f} s, "
           f"command {seconds:.1f} s")

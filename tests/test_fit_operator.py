@@ -244,6 +244,24 @@ def test_the_operator_fits_to_a_principled_material_of_the_file(monkeypatch):
     assert film.users == 0  # lent to the target's sphere, given back
 
 
+@pytest.mark.slow
+def test_choosing_the_structure_for_a_principled_material_tries_the_structures_of_its_surface(monkeypatch):
+    """A metallic Principled BSDF: the selection is told the surface is a metal (only films over a metal
+    are screened); a stop there leaves nothing applied."""
+    obj = add_sphere()
+    film = lookdev.principled_thin_film("Metal film", 200.0, 2.4, (0.54, 0.5, 0.45), 1.0, 0.2)
+    heard = {}
+
+    def selection(views, **options):
+        heard.update(options)
+        raise FitCancelled()
+
+    monkeypatch.setattr(fit_operator, "run_selection", selection)
+    result = bpy.ops.layered_brdf.fit_to_render(source="PRINCIPLED", principled=film.name, start="CHOOSE")
+    assert result == {"CANCELLED"} and heard["surface"] == "metal" and heard["try_noise"] is False
+    assert obj.active_material is None
+
+
 def test_a_target_that_cannot_be_fitted_is_refused_with_nothing_changed(tmp_path):
     obj, mat = layered_object()
     before = state(mat)

@@ -206,3 +206,23 @@ def test_a_render_whose_thickness_is_noise_is_fitted_with_a_noise_pattern(tmp_pa
     assert selection.result.params.thickness_mode == "noise" and "thickness noise" in selection.chosen.label
     records = selection.to_record()
     assert records[0]["thickness_mode"] == "noise" and records[0]["statistics_figure"] is not None
+
+
+@pytest.mark.parametrize("metallic, transmission, kind, bases", [
+    (1.0, 0.0, "metal", {"metal"}), (0.5, 1.0, "metal", {"metal"}), (0.2, 1.0, "see-through", {"transparent"}),
+    (0.0, 0.49, "dielectric", {"none"}),
+])
+def test_a_principled_material_s_surface_keeps_the_structures_of_its_base(metallic, transmission, kind, bases):
+    pool = candidates(thickness_mode="height")
+    assert structures.surface_kind(metallic, transmission) == kind
+    kept = structures.for_surface(pool, kind)
+    assert kept and {c.start.base_layer for c in kept} == bases
+    assert all(c in pool for c in kept) and len(kept) < len(pool)
+
+
+def test_an_unknown_surface_or_a_pinned_base_keeps_the_whole_pool():
+    assert structures.surface_kind(None, 0.0) is None and structures.surface_kind(1.0, None) is None
+    pool = candidates(thickness_mode="height")
+    assert structures.for_surface(pool, None) == pool
+    clear = candidates({"base_layer": "transparent"}, thickness_mode="height")
+    assert structures.for_surface(clear, "metal") == clear  # the user's pin wins over the material

@@ -34,7 +34,7 @@ from .animation import animated_parameters
 from .lookdev import hdri_path
 from .material_values import is_layered, layered_material_of, params_of, settings
 from .own_nodes import shader_node
-from .principled_target import principled_materials, principled_views_of, start_for
+from .principled_target import principled_materials, principled_views_of, start_for, surface_of
 from .sidecar_views import sidecar_views
 from .targets import object_problem, takes_layered_material
 
@@ -118,13 +118,15 @@ def run_fit(target_views, start: LayeredParams, *, progress: Callable[[int], Non
 
 
 def run_selection(target_views, *, progress: Callable[[str, int], None] | None = None,
-                  should_stop: Callable[[], bool] | None = None, try_noise: bool = False, **options):
+                  should_stop: Callable[[], bool] | None = None, try_noise: bool = False,
+                  surface: str | None = None, **options):
     """The fit with no start: every structure screened, the best fitted in full
     (:func:`..fit.structures.select_and_fit`, the thickness by height as the command line's, or for a
-    render a noise pattern where height stays far: ``try_noise``); its
+    render a noise pattern where height stays far: ``try_noise``; for a Principled material the
+    structures of its ``surface``, :func:`..fit.structures.for_surface`); its
     :class:`~..fit.structures.Selection`.  Touches no Blender data: it may run in any thread."""
     options = {**FIT_OPTIONS, **options}
-    pool = structures.candidates(thickness_mode="height")
+    pool = structures.for_surface(structures.candidates(thickness_mode="height"), surface)
     return structures.select_and_fit(sphere_target(target_views), pool, options.pop("vary", None),
                                      progress=progress, should_stop=should_stop, try_noise=try_noise, **options)
 
@@ -178,6 +180,7 @@ class FitJob:
     evaluations: int = 0
     stage: str = ""  # with no start: "screen K/N" or "fit K/N"
     try_noise: bool = False  # with no start: a noise thickness may be chosen (a render's target)
+    surface: str | None = None  # with no start: what a Principled target's material says its surface is
     result: object = None
     error: BaseException | None = None
 
@@ -195,7 +198,7 @@ class FitJob:
         try:
             if self.start is None:
                 self.result = run_selection(self.target_views, progress=self._hear, should_stop=self._stop.is_set,
-                                            try_noise=self.try_noise, **self.options).result
+                                            try_noise=self.try_noise, surface=self.surface, **self.options).result
             else:
                 self.result = run_fit(self.target_views, self.start, progress=self._count,
                                       should_stop=self._stop.is_set, **self.options)
@@ -351,7 +354,8 @@ material of this file (Esc cancels)"""
         self._target_kind = "objects" if isinstance(target, bpy.types.Object) else "materials"
         self._target_pointer = target.as_pointer()
         self._target_name = target.name
-        self._job = FitJob(views, start, dict(FIT_OPTIONS), try_noise=self.source == "RENDER")
+        surface = surface_of(self._principled_material()) if self.source == "PRINCIPLED" else None
+        self._job = FitJob(views, start, dict(FIT_OPTIONS), try_noise=self.source == "RENDER", surface=surface)
         if bpy.app.background or context.window is None:  # no event loop to wait in
             self._job.begin().wait()
             return self._finish(context)

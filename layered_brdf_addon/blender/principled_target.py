@@ -23,6 +23,7 @@ from typing import Sequence
 import bpy
 import numpy as np
 
+from ..fit import structures
 from ..fit.environment import Environment
 from ..fit.targets import SphereView
 from ..model.params import LayeredParams, ParameterError
@@ -97,6 +98,18 @@ def uniform_film(material) -> bool:
     node = principled_node(material)
     sock = node.inputs.get("Thin Film Thickness") if node is not None else None
     return sock is None or not sock.is_linked
+
+
+def surface_of(material) -> str | None:
+    """What the material's Principled BSDF says its surface is (a metal, see-through, a dielectric:
+    :func:`..fit.structures.surface_kind`), from its Metallic and Transmission Weight; None where
+    either is driven by a link."""
+    node = principled_node(material)
+    values = []
+    for name in ("Metallic", "Transmission Weight"):
+        sock = node.inputs.get(name) if node is not None else None
+        values.append(None if sock is None or sock.is_linked else float(sock.default_value))
+    return structures.surface_kind(*values)
 
 
 def start_for(params: LayeredParams, material) -> LayeredParams:

@@ -29,6 +29,7 @@ imports bpy except the ``--principled`` path.
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from typing import Callable, Sequence
 
 from ..fit import solve, structures
@@ -110,6 +111,8 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
         selection = None
         try:
             if req.pool:
+                if source.kind == "principled":  # the material says what its surface is
+                    req = replace(req, pool=tuple(structures.for_surface(req.pool, loaded.record["surface"])))
                 selection = select_with_progress(loaded.target, req, stop)
                 result = selection.result
             else:

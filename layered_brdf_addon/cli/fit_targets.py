@@ -173,7 +173,7 @@ def load_principled_target(source: Source, renders, guard, *, verbose: bool = Fa
     tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
     guard.add_cleanup(tempdirs.remove_process_tempdir)
     from ..blender.lookdev import hdri_path  # imports bpy: after enter_process_tempdir, for Blender's session folder
-    from ..blender.principled_target import principled_views  # imports bpy, as above
+    from ..blender.principled_target import principled_views, surface_of  # imports bpy, as above
 
     hdris = [hdri_path(name) for name in hdri_names]  # a name Blender does not ship: refused before rendering
     guard.arm()
@@ -185,6 +185,9 @@ def load_principled_target(source: Source, renders, guard, *, verbose: bool = Fa
                 raise ParameterError("principled", e.value, e.allowed) from None
             raise
     guard.arm()  # Blender may have replaced the handlers
+    import bpy
+
+    surface = surface_of(bpy.data.materials[source.name])  # the file is still open
     try:
         target = SphereTarget(views)
     except FitTargetError as e:
@@ -193,5 +196,5 @@ def load_principled_target(source: Source, renders, guard, *, verbose: bool = Fa
     record = {"kind": "principled", "blend": blend, "material": source.name, "size": size, "samples": samples,
               "suns": [list(v.sun.direction) for v in views if v.sun is not None],
               "hdris": [v.environment.name for v in views if v.environment is not None],
-              "pixels": int(len(target.observed))}
+              "surface": surface, "pixels": int(len(target.observed))}
     return LoadedTarget(target, record)

@@ -10,7 +10,9 @@ explain the target and keeps the best:
    paper's tilted dispersive layer...) with each of the three lower boundaries, and physical
    optics over each named medium of the preset's kind (the metals under an oxide, the
    dielectrics under a film); the modes the user pins (``--optics``, ``--normal-mode``...) are kept
-   and the candidates that would change them merged away.
+   and the candidates that would change them merged away.  A Principled BSDF target keeps only
+   the candidates whose base is what the material says it is (:func:`for_surface`: Metallic, or
+   Transmission Weight, from 0.5).
 2. **Screening** (in :func:`select_and_fit`): each candidate on a small sample of the target's pixels
    (:data:`SCREEN_PIXELS`): the thickness scan of the full fit (its best order), then a few
    optimiser steps (:data:`SCREEN_STEPS`) from there; its mean CIEDE2000 there is the evidence.
@@ -143,6 +145,32 @@ def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | No
                 if _metal(q) == _metal(p):
                     add(name, q)
     return out
+
+
+SURFACE_BASES = {"metal": ("metal",), "see-through": ("transparent",), "dielectric": ("none",)}
+SURFACE_SPLIT = 0.5  # a Principled BSDF's Metallic (or Transmission Weight) from which it is a metal (see-through)
+
+
+def surface_kind(metallic: float | None, transmission: float | None) -> str | None:
+    """What a Principled BSDF says its surface is: ``"metal"`` (Metallic from :data:`SURFACE_SPLIT`),
+    ``"see-through"`` (Transmission Weight from it), else ``"dielectric"``; None where an input is
+    unknown (driven by a link)."""
+    if metallic is None or transmission is None:
+        return None
+    if metallic >= SURFACE_SPLIT:
+        return "metal"
+    return "see-through" if transmission >= SURFACE_SPLIT else "dielectric"
+
+
+def for_surface(pool: Sequence[Candidate], kind: str | None) -> list[Candidate]:
+    """The candidates of ``pool`` whose base is what the target's material says it is (:func:`surface_kind`:
+    a metal's film over a metal, a see-through film over a clear base, a dielectric's over a diffuse
+    one): the material's own evidence, which one image under suns and an HDRI shows less surely (a
+    metal's tint and a paper film's colour read alike).  The whole pool where ``kind`` is None or where
+    none would be left (the user pinned another base)."""
+    bases = SURFACE_BASES.get(kind, ())
+    kept = [c for c in pool if c.start.base_layer in bases]
+    return kept or list(pool)
 
 
 def _metal(p: LayeredParams) -> bool:
