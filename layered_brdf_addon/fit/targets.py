@@ -191,13 +191,13 @@ class SphereTarget:
         whatever their thickness: the mean CIELAB distance between the target's and their pixel
         groups' mean colours and spreads, weighted as a noise fit weighs them.  A height and a noise
         thickness compared on the same rows."""
-        observed = self._group_stats(colour_space.lab(self.observed, self.white_y)[:, None, :], np.ones(1))
+        rows = params.replace(thickness_mode="noise")  # the statistics' rows, whatever the thickness
         if self.matches_statistics(params):
             model = self.features(params)
         else:
             model = self._group_stats(colour_space.lab(self.predict(params), self.white_y)[:, None, :], np.ones(1))
-        weights = self.feature_weights(params.replace(thickness_mode="noise"))
-        return float(np.average(np.linalg.norm(model - observed, axis=-1), weights=weights))
+        distance = np.linalg.norm(model - self.observed_features(rows), axis=-1)
+        return float(np.average(distance, weights=self.feature_weights(rows)))
 
     def _levels_lab(self, params: LayeredParams) -> np.ndarray:
         """(N, levels, 3): the pixels' colours at each of the noise's thickness levels, the
