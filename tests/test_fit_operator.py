@@ -156,10 +156,12 @@ def test_choosing_the_structure_shows_its_stages_and_applies_the_closest(monkeyp
 
 
 def test_the_selection_s_share_of_the_bar_grows_with_its_stages():
-    stages = [f"screen {k}/45" for k in range(1, 46)] + [f"fit {k}/3" for k in range(1, 4)]
+    stages = ([f"screen {k}/45" for k in range(1, 46)] + [f"fit {k}/3" for k in range(1, 4)]
+              + [f"refine {k}/3" for k in range(1, 4)] + ["noise 1/1"])
     shares = [fit_operator.selection_share(s) for s in stages]
-    assert shares == sorted(shares) and shares[0] == 0.0 and shares[-1] < 1.0
-    assert fit_operator.selection_share("") == 0.0
+    assert shares == sorted(shares) and len(set(shares)) == len(shares) and shares[0] == 0.0 and shares[-1] < 1.0
+    assert fit_operator.selection_share("") == 0.0 and fit_operator.selection_share("later 1/2") == 0.0
+    assert fit_operator.stage_words("refine 2/3") == "refining finalist 2/3"
 
 
 def test_esc_stops_the_modal_fit_with_nothing_changed():

@@ -44,7 +44,11 @@ FIT_OPTIONS = {"starts": 3, "steps_per_start": 40}
 TIMER_SECONDS = 0.2
 CURRENT = "CURRENT"  # start from the material's own values
 CHOOSE = "CHOOSE"  # no start: the fit chooses the structure (fit/structures.py), as ``layered-brdf fit`` without --start
-SCREEN_SHARE = 0.5  # of the progress bar given to screening the structures, the rest to fitting the finalists
+# The progress bar's share of each stage of a selection (fit/structures.py): screening the structures,
+# fitting the finalists from their screened starts, from the scan's other orders, a noise thickness.
+STAGE_SHARES = {"screen": 0.5, "fit": 0.2, "refine": 0.2, "noise": 0.1}
+STAGE_WORDS = {"screen": "screening structure", "fit": "fitting finalist", "refine": "refining finalist",
+               "noise": "trying a noise thickness"}
 NO_MATERIAL = "__none__"  # the file holds no Principled material
 
 
@@ -132,15 +136,25 @@ def run_selection(target_views, *, progress: Callable[[str, int], None] | None =
 
 
 def selection_share(stage: str) -> float:
-    """How far a selection is at ``stage`` ("screen K/N", "fit K/N"): screening the K-th of N
-    structures fills :data:`SCREEN_SHARE` of the bar in N equal steps, fitting the K-th finalist the rest."""
+    """How far a selection is at ``stage`` ("screen K/N", "fit K/N", "refine K/N", "noise 1/1"): each
+    kind of stage fills its share of the bar (:data:`STAGE_SHARES`, in that order) in N equal steps."""
     kind, _, count = stage.partition(" ")
     done, _, total = count.partition("/")
     try:
         share = (int(done) - 1) / max(int(total), 1)
     except ValueError:
         return 0.0
-    return SCREEN_SHARE * share if kind == "screen" else SCREEN_SHARE + (1.0 - SCREEN_SHARE) * share
+    if kind not in STAGE_SHARES:
+        return 0.0
+    kinds = list(STAGE_SHARES)
+    before = sum(STAGE_SHARES[k] for k in kinds[:kinds.index(kind)])
+    return before + STAGE_SHARES[kind] * share
+
+
+def stage_words(stage: str) -> str:
+    """``stage`` in the status bar's words ("screen 3/45" -> "screening structure 3/45")."""
+    kind, _, count = stage.partition(" ")
+    return f"{STAGE_WORDS.get(kind, kind)} {count}".strip()
 
 
 def fit_material_to(material, target_views: Sequence, start: LayeredParams | None = None, *,
@@ -374,7 +388,7 @@ material of this file (Esc cancels)"""
             text = "Layered BRDF: stopping the fit..."
         elif self._total is None:  # choosing the structure
             share = min(selection_share(self._job.stage), 0.99)
-            doing = self._job.stage.replace("screen", "screening structure").replace("fit", "fitting finalist")
+            doing = stage_words(self._job.stage)
             text = (f"Layered BRDF: fitting '{self._target_name}', {doing or 'starting'} "
                     f"(about {100 * share:.0f}%). Esc or right click cancels")
         else:

@@ -73,7 +73,8 @@ def fit_with_progress(target, start: LayeredParams, vary, starts: int, enabled: 
 
 def select_with_progress(target, req: FitRequest, should_stop: Callable[[], bool]):
     """:func:`~layered_brdf_addon.fit.structures.select_and_fit` over the request's structures with a
-    tqdm bar of model evaluations, its label the stage (``screen K/N``, then ``fit K/N``)."""
+    tqdm bar of model evaluations, its label the stage (``screen K/N``, ``fit K/N``,
+    ``refine K/N``, ``noise 1/1``)."""
     from tqdm import tqdm
 
     bar = tqdm(total=None, desc="fit", unit="eval", file=sys.stderr, disable=not req.progress, dynamic_ncols=True)

@@ -198,11 +198,11 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     ``vary``: the free parameters (default :func:`~.free.default_vary`); the others keep
     ``start``'s values.  ``starts``: how many of the thickness scan's best orders are tried
     besides ``start`` (when the thickness is free), unless one already matches within
-    :data:`GOOD_ENOUGH`; ``steps_per_start``: the optimiser's steps from each (each step
-    evaluates the model once per free parameter for the slopes, and once more); ``try_start=False``: the
-    scan's orders only, not ``start``'s own thickness; ``index_scan=False``: the scan keeps the start's
-layer indices (:func:`thickness_starts`).  ``progress(evaluations)`` is called at
-    each evaluation of the model; ``should_stop()`` returning True ends the fit with
+    :data:`GOOD_ENOUGH` (0: ``start`` alone, no scan); ``steps_per_start``: the optimiser's steps
+    from each (each step evaluates the model once per free parameter for the slopes, and once more);
+    ``try_start=False``: the scan's orders only, not ``start``'s own thickness; ``index_scan=False``:
+    the scan keeps the start's layer indices (:func:`thickness_starts`).  ``progress(evaluations)``
+    is called at each evaluation of the model; ``should_stop()`` returning True ends the fit with
     :class:`FitCancelled`.
     """
     t0 = time.perf_counter()
@@ -218,7 +218,8 @@ layer indices (:func:`thickness_starts`).  ``progress(evaluations)`` is called a
     objective = _Objective(target, free, progress, should_stop)
     lo, hi = free.bounds()
     thickness_free = {"d_min", "d_max"} & set(names)
-    firsts = thickness_starts(objective, start, starts, try_start, index_scan) if thickness_free else [start]
+    scan = thickness_free and starts > 0
+    firsts = thickness_starts(objective, start, starts, try_start, index_scan) if scan else [start]
     best, best_de, tried = None, np.inf, []
     for first in firsts:
         sol = least_squares(objective, free.vector(first, START_MARGIN), objective.jacobian, (lo, hi),

@@ -20,9 +20,12 @@ explain the target and keeps the best:
    colour scores badly whatever its thickness, at the cost of a few hundred evaluations of a
    small sample.
 3. **The full fit** (:func:`select_and_fit`) of the best :data:`FINALISTS` (and any other within
-   :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel; the lowest
-   mean CIEDE2000 over every pixel of the sphere wins.  Every candidate's figures are returned
-   for the report.
+   :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel, in two rounds:
+   each from its screened start (the scan's best order on the sample), then, only where none came
+   within the fit's :data:`~.solve.GOOD_ENOUGH`, each from the full scan's other orders (layer
+   indices scanned too) -- the second round is most of the time, and a finalist that already
+   matches makes it moot.  The lowest mean CIEDE2000 over every pixel of the sphere wins.  Every
+   candidate's figures are returned for the report.
 4. **The thickness pattern**: the candidates' thickness follows the surface's height (numpy
    reproduces it pixel by pixel).  Where the best of them stays over :data:`NOISE_TRIAL_DELTA_E`
    and the pattern is free (``try_noise``), its structure (unless its lower boundary follows the
@@ -212,7 +215,8 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
     """Screen every candidate of ``pool`` on a sample of ``target``, fit the finalists on all of it,
     keep the lowest mean CIEDE2000; with ``try_noise``, a noise thickness for the best where it stays
     far (the module's step 4).  ``progress(stage, evaluations)`` hears each evaluation, the stage
-    ``"screen K/N"`` or ``"fit K/N"``; ``should_stop()`` ends it (:class:`~.solve.FitCancelled`)."""
+    ``"screen K/N"``, ``"fit K/N"``, ``"refine K/N"`` or ``"noise 1/1"``; ``should_stop()`` ends it
+    (:class:`~.solve.FitCancelled`)."""
     t0 = time.perf_counter()
     total = 0
     small = screening_target(target)
@@ -232,26 +236,40 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
                            progress=hearing(stage), should_stop=should_stop, try_start=False, index_scan=False)
         c.screen_delta_e, c.start = result.mean_delta_e, result.params
         total += result.evaluations
-    chosen, best = None, None
     last = finalists(pool)
     noise = try_noise and isinstance(target, SphereTarget)
-    for k, c in enumerate(last):
-        result = solve.fit(target, c.start, vary, starts=starts, steps_per_start=steps_per_start,
-                           progress=hearing(f"fit {k + 1}/{len(last)}"), should_stop=should_stop)
-        c.delta_e, c.result = result.mean_delta_e, result
-        if hasattr(target, "image_delta_e"):
-            c.image_delta_e = target.image_delta_e(result.params)
+
+    def full_fit(c: Candidate, stage: str, **how) -> None:
+        """Fit ``c`` on the whole target; keep the result where it beats the candidate's last."""
+        nonlocal total
+        result = solve.fit(target, c.start, vary, steps_per_start=steps_per_start, progress=hearing(stage),
+                           should_stop=should_stop, **how)
         total += result.evaluations
-        if chosen is None or c.figure() < chosen.figure():
-            chosen, best = c, result
+        figure = target.image_delta_e(result.params) if hasattr(target, "image_delta_e") else None
+        if c.result is None or (figure if figure is not None else result.mean_delta_e) < c.figure():
+            c.delta_e, c.image_delta_e, c.result = result.mean_delta_e, figure, result
+
+    for k, c in enumerate(last):  # each finalist from its screened start (its scan's best order)
+        full_fit(c, f"fit {k + 1}/{len(last)}", starts=0)
+    if min(c.delta_e for c in last) > solve.GOOD_ENOUGH and starts > 0:  # none matches yet: the other orders
+        for k, c in enumerate(last):
+            full_fit(c, f"refine {k + 1}/{len(last)}", starts=starts, try_start=False)
+    chosen = min(last, key=Candidate.figure)
+    best = chosen.result
     if (noise and chosen.figure() > NOISE_TRIAL_DELTA_E and chosen.start.thickness_mode != "noise"
             and chosen.start.normal_mode != "correlated"):  # numpy has no slope of Blender's noise to tilt by
         start = best.params.replace(thickness_mode="noise")
         c = Candidate(_label(chosen.preset, start), start, chosen.preset, screen_delta_e=chosen.screen_delta_e)
-        # one more full fit, known only now: the stage's count grows by one (the bar still only moves on)
-        result = solve.fit(target, start, vary, starts=starts, steps_per_start=steps_per_start,
-                           progress=hearing(f"fit {len(last) + 1}/{len(last) + 1}"), should_stop=should_stop)
-        total += result.evaluations
+        rounds = [dict(starts=0), dict(starts=starts, try_start=False)]  # the height fit's order first, as above
+        result = None
+        for how in rounds if starts > 0 else rounds[:1]:
+            tried = solve.fit(target, start, vary, steps_per_start=steps_per_start, progress=hearing("noise 1/1"),
+                              should_stop=should_stop, **how)
+            total += tried.evaluations
+            if result is None or tried.mean_delta_e < result.mean_delta_e:
+                result = tried
+            if result.mean_delta_e <= solve.GOOD_ENOUGH:
+                break
         c.delta_e, c.result = result.mean_delta_e, result
         c.statistics, chosen.statistics = target.statistics_figure(result.params), target.statistics_figure(best.params)
         pool.append(c)
