@@ -23,7 +23,7 @@ explain the target and keeps the best:
    :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel, in two rounds:
    each from its screened start (the scan's best order on the sample), then, only where none came
    within the fit's :data:`~.solve.GOOD_ENOUGH`, each from the full scan's other orders (layer
-   indices scanned too) -- the second round is most of the time, and a finalist that already
+   indices scanned too) -- the second round costs most of the time, and a finalist that already
    matches makes it moot.  The lowest mean CIEDE2000 over every pixel of the sphere wins.  Every
    candidate's figures are returned for the report.
 4. **The thickness pattern**: the candidates' thickness follows the surface's height (numpy
