@@ -49,9 +49,12 @@ demo: $(STAMP)
 	@$(WHICH)
 	$(PY) -m layered_brdf_addon
 
+# The suite runs in TEST_JOBS processes (pytest-xdist; a test file's tests stay in one process, so its
+# module fixtures and scene are built once); TEST_JOBS=1 runs it in this one.
+TEST_JOBS ?= 2
 test: $(STAMP)
 	@$(WHICH)
-	$(PY) -m pytest $(PYTEST_ARGS)
+	$(PY) -m pytest $(if $(filter-out 0 1,$(TEST_JOBS)),-n $(TEST_JOBS) --dist loadfile) $(PYTEST_ARGS)
 
 # Rewrite osl/layered_brdf.osl and node_groups/*.json from the shading program, docs/options.md from the
 # command line's option table.

@@ -150,3 +150,18 @@ def test_imports_run_down_the_layers():
                 wrong += [f"{module} -> {target}" for target, _, _ in _imports(module)
                           if any(target == f or target.startswith(f + ".") for f in forbidden)]
     assert not wrong, "imports against the layers: " + "; ".join(sorted(wrong))
+
+
+def test_the_add_on_s_warnings_are_defined_where_bpy_is_not_imported():
+    """A warning's class is imported again wherever the warning is reported (pytest-xdist's controller
+    imports the module that defines it): a warning defined in the Blender layer would load bpy in a process
+    that does not render, which Blender's module does not leave cleanly."""
+    in_blender = []
+    for module, (path, _) in MODULES.items():
+        if not module.startswith("layered_brdf_addon.blender"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ClassDef) and any(
+                    (b.id if isinstance(b, ast.Name) else getattr(b, "attr", "")).endswith("Warning") for b in node.bases):
+                in_blender.append(f"{module}.{node.name}")
+    assert not in_blender, "warnings defined in the Blender layer: " + ", ".join(in_blender)

@@ -23,6 +23,7 @@ import bpy
 
 from . import build, freshness, sync
 from . import osl as osl_backend
+from ..model.policy import OSLSceneWarning
 from .animation import animated_parameters
 from .build import tree_current
 from .own_nodes import shader_node
@@ -33,10 +34,6 @@ from .stored_keys import (AOV_LOWER_NORMAL, AOV_THICKNESS, AOV_UPPER_NORMAL, BAC
                           NAME_KEY, ROLE_KEY, SHADER_NODE, SLOT_KEY, SUBGROUP_KEY, TEXT_KEY)
 from .targets import SURFACE_KINDS, SURFACE_OBJECTS, DataBlockError, object_problem, takes_layered_material
 from .unused_data import remove_unused_own_data
-
-
-class OSLSceneWarning(UserWarning):
-    """An OSL material applied where the scene cannot run it (Cycles renders it black)."""
 
 
 def _warn_osl_scene(mat) -> None:

@@ -2,8 +2,8 @@
 
 Interference colours repeat with thickness (each order of the film shows the sequence
 again), so a local optimiser started anywhere finds the nearest order, not the best one:
-the starts are the best few of a coarse scan over the mean thickness (the range's relative
-width kept), plus the start itself.  Each runs :func:`.least_squares.least_squares` (bounded
+the start itself is fitted first, then, unless it already matches, the best few of a coarse
+scan over the mean thickness (the range's relative width kept).  Each runs :func:`.least_squares.least_squares` (bounded
 Levenberg-Marquardt in numpy, bounds from the parameter table, soft-L1 loss: a few pixels the
 model cannot reach, a clipped highlight or a speck, do not pull the fit), and the best result wins.
 
@@ -163,10 +163,9 @@ def _soft_l1(r: np.ndarray) -> float:
 
 
 def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
-                     with_start: bool = True, index_scan: bool = True) -> list[LayeredParams]:
-    """The start (unless not ``with_start``) and the ``count`` best thickness ranges of a coarse scan
-    (local minima of the loss along the mean thickness, best first), at the start's relative width and
-    at :data:`SCAN_HALF_WIDTHS`; with ``index_scan``, where the layer's three indices are free, at the
+                     index_scan: bool = True) -> list[LayeredParams]:
+    """The ``count`` best thickness ranges of a coarse scan (local minima of the loss along the mean
+    thickness, best first), at the start's relative width and at :data:`SCAN_HALF_WIDTHS`; with ``index_scan``, where the layer's three indices are free, at the
     start's indices scaled by :data:`INDEX_SCAN_FACTORS` too (a film of another index shows the same
     colours at another thickness, but refracts, and so tilts its colours, otherwise)."""
     lo, hi = start.d_min, start.d_max
@@ -186,7 +185,7 @@ def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
     minima = [i for i in range(len(candidates))
               if (i % n == 0 or losses[i] <= losses[i - 1]) and (i % n == n - 1 or losses[i] <= losses[i + 1])]
     minima.sort(key=lambda i: losses[i])
-    return ([start] if with_start else []) + [candidates[i] for i in minima[:count]]
+    return [candidates[i] for i in minima[:count]]
 
 
 def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, starts: int = 3,
@@ -198,7 +197,8 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     ``vary``: the free parameters (default :func:`~.free.default_vary`); the others keep
     ``start``'s values.  ``starts``: how many of the thickness scan's best orders are tried
     besides ``start`` (when the thickness is free), unless one already matches within
-    :data:`GOOD_ENOUGH` (0: ``start`` alone, no scan); ``steps_per_start``: the optimiser's steps
+    :data:`GOOD_ENOUGH` (0: ``start`` alone, no scan; the scan itself is run only once ``start``'s
+    own fit falls short); ``steps_per_start``: the optimiser's steps
     from each (each step evaluates the model once per free parameter for the slopes, and once more);
     ``try_start=False``: the scan's orders only, not ``start``'s own thickness; ``index_scan=False``:
     the scan keeps the start's layer indices (:func:`thickness_starts`).  ``progress(evaluations)``
@@ -219,9 +219,16 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     lo, hi = free.bounds()
     thickness_free = {"d_min", "d_max"} & set(names)
     scan = thickness_free and starts > 0
-    firsts = thickness_starts(objective, start, starts, try_start, index_scan) if scan else [start]
     best, best_de, tried = None, np.inf, []
-    for first in firsts:
+
+    def firsts():
+        """The start, then the scan's orders: the scan is run only if the start does not match."""
+        if try_start or not scan:
+            yield start
+        if scan:
+            yield from thickness_starts(objective, start, starts, index_scan)
+
+    for first in firsts():
         sol = least_squares(objective, free.vector(first, START_MARGIN), objective.jacobian, (lo, hi),
                             f_scale=LOSS_SCALE, max_nfev=steps_per_start)
         params = free.params(sol.x)

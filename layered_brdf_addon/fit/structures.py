@@ -246,8 +246,9 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
                            should_stop=should_stop, **how)
         total += result.evaluations
         figure = target.image_delta_e(result.params) if hasattr(target, "image_delta_e") else None
-        if c.result is None or (figure if figure is not None else result.mean_delta_e) < c.figure():
-            c.delta_e, c.image_delta_e, c.result = result.mean_delta_e, figure, result
+        fitted = replace(c, delta_e=result.mean_delta_e, image_delta_e=figure, result=result)
+        if c.result is None or fitted.figure() < c.figure():
+            c.delta_e, c.image_delta_e, c.result = fitted.delta_e, fitted.image_delta_e, result
 
     for k, c in enumerate(last):  # each finalist from its screened start (its scan's best order)
         full_fit(c, f"fit {k + 1}/{len(last)}", starts=0)
@@ -260,16 +261,10 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
             and chosen.start.normal_mode != "correlated"):  # numpy has no slope of Blender's noise to tilt by
         start = best.params.replace(thickness_mode="noise")
         c = Candidate(_label(chosen.preset, start), start, chosen.preset, screen_delta_e=chosen.screen_delta_e)
-        rounds = [dict(starts=0), dict(starts=starts, try_start=False)]  # the height fit's order first, as above
-        result = None
-        for how in rounds if starts > 0 else rounds[:1]:
-            tried = solve.fit(target, start, vary, steps_per_start=steps_per_start, progress=hearing("noise 1/1"),
-                              should_stop=should_stop, **how)
-            total += tried.evaluations
-            if result is None or tried.mean_delta_e < result.mean_delta_e:
-                result = tried
-            if result.mean_delta_e <= solve.GOOD_ENOUGH:
-                break
+        # The height fit's order first, the scan's other orders only where it falls short (as above).
+        result = solve.fit(target, start, vary, starts=starts, steps_per_start=steps_per_start,
+                           progress=hearing("noise 1/1"), should_stop=should_stop)
+        total += result.evaluations
         c.delta_e, c.result = result.mean_delta_e, result
         c.statistics, chosen.statistics = target.statistics_figure(result.params), target.statistics_figure(best.params)
         pool.append(c)

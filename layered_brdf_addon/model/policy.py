@@ -26,6 +26,10 @@ from .table_check import checked_bake
 #: The shader backends: a node group of stock nodes, or an OSL shader (Cycles CPU / OptiX).
 BACKENDS = ("nodes", "osl")
 
+
+class OSLSceneWarning(UserWarning):
+    """An OSL material applied where the scene cannot run it (Cycles renders it black)."""
+
 #: The specular closures each backend can build.
 LOBES_BY_BACKEND = {"nodes": ("beckmann",), "osl": ("beckmann", "phong")}
 
