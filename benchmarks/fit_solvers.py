@@ -23,7 +23,7 @@ import colour  # noqa: E402
 from scipy.optimize import least_squares as scipy_least_squares  # noqa: E402
 
 from layered_brdf_addon.fit import colour_space, solve  # noqa: E402
-from layered_brdf_addon.fit.structures import candidates, select_and_fit  # noqa: E402
+from layered_brdf_addon.fit.structures import select_and_fit, structure_pool  # noqa: E402
 from layered_brdf_addon.fit.targets import ReflectanceTarget, SphereTarget  # noqa: E402
 from layered_brdf_addon.model.presets import preset  # noqa: E402
 from layered_brdf_reference.fit_cases import FILMS, generated_targets, held_out, image_delta_e, tmm_rows, views_of  # noqa: E402
@@ -56,7 +56,7 @@ SOLVERS = ("numpy", "scipy + colour-science")
 
 def _cases(selection: bool):
     if selection:
-        pool = candidates(thickness_mode="height")
+        pool = structure_pool()
         for name, truth in generated_targets().items():
             target = SphereTarget(views_of(truth))
             yield f"{name} (no start)", target, lambda t=target: select_and_fit(t, pool).result, True

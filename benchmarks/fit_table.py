@@ -18,7 +18,7 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 from layered_brdf_addon.fit.solve import fit  # noqa: E402
-from layered_brdf_addon.fit.structures import candidates, select_and_fit  # noqa: E402
+from layered_brdf_addon.fit.structures import select_and_fit, structure_pool  # noqa: E402
 from layered_brdf_addon.fit.targets import ReflectanceTarget, SphereTarget  # noqa: E402
 from layered_brdf_addon.model.presets import preset  # noqa: E402
 from layered_brdf_reference.fit_cases import (FILMS, SUNS, generated_targets, held_out, image_delta_e,  # noqa: E402
@@ -57,7 +57,7 @@ def _modes(p) -> str:
 def selection_rows() -> list[tuple]:
     """Generated targets (no preset's values) fitted with no start: the structure chosen among every
     candidate, and the image's CIEDE2000 (every pixel of the sphere) against the fit's own figure."""
-    rows, pool = [], candidates(thickness_mode="height")
+    rows, pool = [], structure_pool()
     for name, truth in generated_targets().items():
         target = SphereTarget(views_of(truth))
         c0, w0 = time.process_time(), time.perf_counter()

@@ -143,7 +143,7 @@ def test_choosing_the_structure_shows_its_stages_and_applies_the_closest(monkeyp
             if c.preset in ("oil_slick", "soap_bubble", "fig4_parallel") and c.start.normal_mode == "parallel"
             and c.start.lower_medium in ("water", "air", "custom")]
     assert len(pool) == 3, [c.label for c in pool]
-    monkeypatch.setattr(structures, "candidates", lambda **kw: pool)
+    monkeypatch.setattr(structures, "structure_pool", lambda **kw: pool)
     context = modal_context()
     op = RunningFit(mat, {"starts": 1, "steps_per_start": 8}, start=None)
     assert op.run(context) == {"FINISHED"}

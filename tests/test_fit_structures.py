@@ -56,6 +56,22 @@ def test_pinned_modes_hold_for_every_candidate():
     assert all(c.start.normal_mode == "parallel" for c in candidates({"normal_mode": "parallel"}))
 
 
+def test_the_pool_of_a_fit_with_no_start_follows_its_target_and_what_is_pinned():
+    """One pool for the command line, the panel and the benchmarks: thickness by height unless pinned, a
+    reflectance table's film parallel unless pinned, a Principled material's surface narrowing it."""
+    sphere = structures.structure_pool()
+    assert [c.label for c in sphere] == [c.label for c in candidates(thickness_mode="height")]
+    table = structures.structure_pool(reflectance=True)
+    assert table and all(c.start.normal_mode == "parallel" for c in table) and len(table) < len(sphere)
+    tilted = structures.structure_pool(reflectance=True, pinned={"normal_mode": "tilted"})
+    assert tilted and all(c.start.normal_mode == "tilted" for c in tilted)
+    noise = structures.structure_pool(pinned={"thickness_mode": "noise", "optics": "paper"})
+    assert noise and all(c.start.thickness_mode == "noise" and c.start.optics == "paper" for c in noise)
+    metal = structures.structure_pool(surface="metal")
+    assert metal and {c.start.base_layer for c in metal} == {"metal"}
+    assert [c.label for c in metal] == [c.label for c in structures.for_surface(sphere, "metal")]
+
+
 def test_finalists_are_the_best_few_and_any_close_behind(monkeypatch):
     monkeypatch.setattr(structures, "FINALISTS", 2)
     figures = [4.0, 1.0, 1.2, 9.0, 1.24]

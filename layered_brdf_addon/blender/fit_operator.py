@@ -130,7 +130,7 @@ def run_selection(target_views, *, progress: Callable[[str, int], None] | None =
     structures of its ``surface``, :func:`..fit.structures.for_surface`); its
     :class:`~..fit.structures.Selection`.  Touches no Blender data: it may run in any thread."""
     options = {**FIT_OPTIONS, **options}
-    pool = structures.for_surface(structures.candidates(thickness_mode="height"), surface)
+    pool = structures.structure_pool(surface=surface)
     return structures.select_and_fit(sphere_target(target_views), pool, options.pop("vary", None),
                                      progress=progress, should_stop=should_stop, try_noise=try_noise, **options)
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..fit.structures import Candidate, candidates
+from ..fit.structures import Candidate, structure_pool
 from ..io.sidecar import sidecar_path
 from ..io.staging import OutputPaths
 from ..model.params import LayeredParams, ParameterError
@@ -112,17 +112,6 @@ def start_of(given: Mapping[str, Any]) -> tuple[LayeredParams, dict[str, Any]]:
     return params, {"preset": name, "params_file": params_file, "overrides": overrides}
 
 
-def structure_pool(given: Mapping[str, Any], kind: str) -> tuple[Candidate, ...]:
-    """The structures a fit with neither ``start`` nor ``params`` chooses among
-    (:func:`~..fit.structures.candidates`), the mode options given pinned; a sphere target's
-    thickness goes by height unless ``thickness_mode`` says otherwise (numpy reproduces a height
-    pixel by pixel), a reflectance table's film is smooth and uniform (its lower boundary parallel)."""
-    pinned = mode_overrides(given)
-    if kind == "reflectance":
-        pinned.setdefault("normal_mode", "parallel")
-    return tuple(candidates(pinned, thickness_mode=pinned.pop("thickness_mode", "height")))
-
-
 def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
     """Validate ``fit``'s options (names with ``_``): each value alone (the option table), then the target
     they name, the start, and the outputs (writable, replacing no input)."""
@@ -130,7 +119,7 @@ def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
     source = source_of(given)
     select = given.get("start") is None and given.get("params") is None
     if select:
-        start, pool = None, structure_pool(given, source.kind)
+        start, pool = None, tuple(structure_pool(source.kind == "reflectance", mode_overrides(given)))
         record = {"preset": None, "params_file": None, "chosen_by": "model selection",
                   "overrides": mode_overrides(given)}
     else:

@@ -12,7 +12,7 @@ explain the target and keeps the best:
    dielectrics under a film); the modes the user pins (``--optics``, ``--normal-mode``...) are kept
    and the candidates that would change them merged away.  A Principled BSDF target keeps only
    the candidates whose base is what the material says it is (:func:`for_surface`: Metallic, or
-   Transmission Weight, from 0.5).
+   Transmission Weight, from 0.5).  :func:`structure_pool` is the pool every caller asks for.
 2. **Screening** (in :func:`select_and_fit`): each candidate on a small sample of the target's pixels
    (:data:`SCREEN_PIXELS`): the thickness scan of the full fit (its best order), then a few
    optimiser steps (:data:`SCREEN_STEPS`) from there; its mean CIEDE2000 there is the evidence.
@@ -174,6 +174,19 @@ def for_surface(pool: Sequence[Candidate], kind: str | None) -> list[Candidate]:
     bases = SURFACE_BASES.get(kind, ())
     kept = [c for c in pool if c.start.base_layer in bases]
     return kept or list(pool)
+
+
+def structure_pool(reflectance: bool = False, pinned: Mapping[str, str] | None = None,
+                   surface: str | None = None) -> list[Candidate]:
+    """The structures a fit with no start chooses among, as the command line, the panel and the
+    benchmarks ask for them: :func:`candidates` with the ``pinned`` modes, the thickness by height
+    unless pinned (numpy reproduces a height pixel by pixel); for a ``reflectance`` table a smooth,
+    uniform film (its lower boundary parallel unless pinned); for a Principled material the
+    structures of its ``surface`` (:func:`for_surface`)."""
+    pinned = dict(pinned or {})
+    if reflectance:
+        pinned.setdefault("normal_mode", "parallel")
+    return for_surface(candidates(pinned, thickness_mode=pinned.pop("thickness_mode", "height")), surface)
 
 
 def _metal(p: LayeredParams) -> bool:
