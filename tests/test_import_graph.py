@@ -161,7 +161,7 @@ def test_the_add_on_s_warnings_are_defined_where_bpy_is_not_imported():
         if not module.startswith("layered_brdf_addon.blender"):
             continue
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            if isinstance(node, ast.ClassDef) and any(
-                    (b.id if isinstance(b, ast.Name) else getattr(b, "attr", "")).endswith("Warning") for b in node.bases):
+            bases = [b.id if isinstance(b, ast.Name) else getattr(b, "attr", "") for b in getattr(node, "bases", ())]
+            if isinstance(node, ast.ClassDef) and any(base.endswith("Warning") for base in bases):
                 in_blender.append(f"{module}.{node.name}")
     assert not in_blender, "warnings defined in the Blender layer: " + ", ".join(in_blender)

@@ -119,9 +119,9 @@ def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
     source = source_of(given)
     select = given.get("start") is None and given.get("params") is None
     if select:
-        start, pool = None, tuple(structure_pool(source.kind == "reflectance", mode_overrides(given)))
-        record = {"preset": None, "params_file": None, "chosen_by": "model selection",
-                  "overrides": mode_overrides(given)}
+        pinned = mode_overrides(given)
+        start, pool = None, tuple(structure_pool(source.kind == "reflectance", pinned))
+        record = {"preset": None, "params_file": None, "chosen_by": "model selection", "overrides": pinned}
     else:
         (start, record), pool = start_of(given), ()
     inputs = list(source.inputs)

@@ -3,9 +3,10 @@
 Interference colours repeat with thickness (each order of the film shows the sequence
 again), so a local optimiser started anywhere finds the nearest order, not the best one:
 the start itself is fitted first, then, unless it already matches, the best few of a coarse
-scan over the mean thickness (the range's relative width kept).  Each runs :func:`.least_squares.least_squares` (bounded
-Levenberg-Marquardt in numpy, bounds from the parameter table, soft-L1 loss: a few pixels the
-model cannot reach, a clipped highlight or a speck, do not pull the fit), and the best result wins.
+scan over the mean thickness (the range's relative width kept).  Each runs
+:func:`.least_squares.least_squares` (bounded Levenberg-Marquardt in numpy, bounds from the
+parameter table, soft-L1 loss: a few pixels the model cannot reach, a clipped highlight or a
+speck, do not pull the fit), and the best result wins.
 
 The slopes are forward differences (SciPy's steps), but the parameter sets of a Jacobian's columns
 (and the scan's candidates) are evaluated together: a sphere target shades them in one run
@@ -165,9 +166,10 @@ def _soft_l1(r: np.ndarray) -> float:
 def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
                      index_scan: bool = True) -> list[LayeredParams]:
     """The ``count`` best thickness ranges of a coarse scan (local minima of the loss along the mean
-    thickness, best first), at the start's relative width and at :data:`SCAN_HALF_WIDTHS`; with ``index_scan``, where the layer's three indices are free, at the
-    start's indices scaled by :data:`INDEX_SCAN_FACTORS` too (a film of another index shows the same
-    colours at another thickness, but refracts, and so tilts its colours, otherwise)."""
+    thickness, best first), at the start's relative width and at :data:`SCAN_HALF_WIDTHS`; with
+    ``index_scan``, where the layer's three indices are free, at the start's indices scaled by
+    :data:`INDEX_SCAN_FACTORS` too (a film of another index shows the same colours at another thickness,
+    but refracts, and so tilts its colours, otherwise)."""
     lo, hi = start.d_min, start.d_max
     mids = np.geomspace(*THICKNESS_SCAN_NM, THICKNESS_SCAN_STEPS)
     if getattr(objective.target, "uniform_film", False):
@@ -198,8 +200,8 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     ``start``'s values.  ``starts``: how many of the thickness scan's best orders are tried
     besides ``start`` (when the thickness is free), unless one already matches within
     :data:`GOOD_ENOUGH` (0: ``start`` alone, no scan; the scan itself is run only once ``start``'s
-    own fit falls short); ``steps_per_start``: the optimiser's steps
-    from each (each step evaluates the model once per free parameter for the slopes, and once more);
+    own fit falls short); ``steps_per_start``: the optimiser's steps from each (each step evaluates
+    the model once per free parameter for the slopes, and once more);
     ``try_start=False``: the scan's orders only, not ``start``'s own thickness; ``index_scan=False``:
     the scan keeps the start's layer indices (:func:`thickness_starts`).  ``progress(evaluations)``
     is called at each evaluation of the model; ``should_stop()`` returning True ends the fit with

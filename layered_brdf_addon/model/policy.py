@@ -30,6 +30,7 @@ BACKENDS = ("nodes", "osl")
 class OSLSceneWarning(UserWarning):
     """An OSL material applied where the scene cannot run it (Cycles renders it black)."""
 
+
 #: The specular closures each backend can build.
 LOBES_BY_BACKEND = {"nodes": ("beckmann",), "osl": ("beckmann", "phong")}
 
