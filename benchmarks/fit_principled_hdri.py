@@ -5,7 +5,8 @@ fit to their reference-sphere renders (three suns, ``blender.principled_target``
 Principled material and the fitted layered material rendered by Cycles on the look-dev ball
 under each bundled HDRI named (Standard view transform, linear EXR); the mean CIEDE2000
 over the ball's pixels (those that differ from a render without the ball), colours on the
-scale of the Principled render's 99th percentile luminance.  ``--select``: the fit chooses the
+scale of the Principled render's 99th percentile luminance; and the fit's own views rendered again
+with the fitted material, compared as ``fit --verify`` compares them.  ``--select``: the fit chooses the
 structure (no start), as the command line and the panel do by default.  Prints a table
 (``--markdown`` for docs/fitting.md).
 """
@@ -23,7 +24,7 @@ import numpy as np  # noqa: E402
 
 from layered_brdf_addon.blender import lookdev  # noqa: E402
 from layered_brdf_addon.blender import principled_target  # noqa: E402
-from layered_brdf_addon.blender.fit_operator import run_fit, run_selection  # noqa: E402
+from layered_brdf_addon.blender.fit_operator import run_fit, run_selection, sphere_target  # noqa: E402
 from layered_brdf_addon.blender.material import apply_layered_material  # noqa: E402
 from layered_brdf_addon.blender.scene import render_to_file, reset_blender  # noqa: E402
 from layered_brdf_addon.fit import colour_space  # noqa: E402
@@ -95,6 +96,11 @@ def main(argv=None) -> None:
             else:
                 result = run_fit(views, principled_target.start_for(preset(start), material))
             seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+            # The fit's own views rendered again with the fitted material (what 'fit --verify' reports).
+            target = sphere_target(views)
+            fitted = target.image_delta_e(result.params)  # the figure 'fit' reports: every pixel, the closure form
+            again = principled_target.layered_views(result.params, hdris=hdris)
+            rerendered = np.mean(np.concatenate(target.images_delta_e([v.image for v in again])))
             import bpy
 
             layered = apply_layered_material(bpy.data.materials.new(f"{name} fitted"), result.params)
@@ -105,11 +111,11 @@ def main(argv=None) -> None:
                 errors.append(ball_delta_e(a, b, empties[h]))
                 tiles += [a, b]
             sheet_rows.append(np.concatenate(tiles, axis=1))
-            rows.append((name, start, f"{result.mean_delta_e:.2f}", *(f"{e:.2f}" for e in errors),
+            rows.append((name, start, f"{fitted:.2f}", f"{rerendered:.2f}", *(f"{e:.2f}" for e in errors),
                          f"{cpu:.0f} / {seconds:.0f}"))
     lights = "three suns" + "".join(f" + {h}" for h in args.fit_hdris)
-    header = ("material", "structure chosen" if args.select else "start", f"ΔE00 fitted ({lights})", *(f"ΔE00 ball, {h}" for h in args.hdris),
-              "fit CPU / wall s")
+    header = ("material", "structure chosen" if args.select else "start", f"ΔE00 fitted ({lights}, the sphere)",
+              "ΔE00 re-rendered (the same views)", *(f"ΔE00 ball, {h}" for h in args.hdris), "fit CPU / wall s")
     print(table(header, rows, args.markdown))
     if args.sheet:
         save_sheet(Path(args.sheet), np.concatenate(sheet_rows, axis=0))

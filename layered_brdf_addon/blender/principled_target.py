@@ -28,6 +28,7 @@ from ..fit.environment import Environment
 from ..fit.targets import SphereView
 from ..model.params import LayeredParams, ParameterError
 from ..model.sphere import Sun
+from .material import apply_layered_material
 from .scene import SceneSpec, build_scene, camera_for, render_to_file, set_hdri_environment
 from . import tempdirs
 
@@ -49,6 +50,8 @@ TARGET_SLOT = "Layered BRDF fit target"  # the Render Result slot the target ren
 REFERENCE_WORLD = "RefWorld"  # the world build_scene reuses by name
 # The kinds of datablock building and rendering the target scene creates (and removes again).
 SCENE_DATA = ("scenes", "objects", "meshes", "cameras", "lights", "worlds", "images")
+# What applying a layered material makes besides (its material, node groups, OSL texts; its tables are images).
+LAYERED_DATA = SCENE_DATA + ("materials", "node_groups", "texts")
 
 
 def sun_off_view(degrees: float, azimuth: float = 90.0, strength: float = SUN_STRENGTH) -> Sun:
@@ -139,14 +142,15 @@ def _pointers(kind: str) -> set[int]:
 
 
 @contextmanager
-def _temporary_data():
-    """Remove, after the block, every scene, object, mesh, camera, light, world and image made
-    inside it: what building and rendering the target scene created, nothing that was there."""
-    before = {kind: _pointers(kind) for kind in SCENE_DATA}
+def _temporary_data(kinds: Sequence[str] = SCENE_DATA):
+    """Remove, after the block, every datablock of ``kinds`` (by default scenes, objects, meshes,
+    cameras, lights, worlds and images) made inside it: what building and rendering the target
+    scene created, nothing that was there."""
+    before = {kind: _pointers(kind) for kind in kinds}
     try:
         yield
     finally:
-        made = [block for kind in SCENE_DATA for block in getattr(bpy.data, kind)
+        made = [block for kind in kinds for block in getattr(bpy.data, kind)
                 if block.as_pointer() not in before[kind]]
         if made:
             bpy.data.batch_remove(made)
@@ -242,6 +246,29 @@ def environment_of(image_path, strength: float = 1.0) -> Environment:
     return Environment(pixels[::-1], strength, path.name)
 
 
+def _check_views(size, samples, suns, hdris, hdri_samples) -> tuple:
+    size, samples = check_render_options(size, samples)
+    if isinstance(hdri_samples, bool) or not isinstance(hdri_samples, int) or not 1 <= hdri_samples <= 65536:
+        raise ParameterError("hdri_samples", hdri_samples, "an integer in [1, 65536]")
+    suns = tuple(suns)
+    if not all(isinstance(s, Sun) for s in suns) or not (suns or hdris):
+        raise ParameterError("suns", suns, "model.sphere.Sun values (one or more, unless HDRIs light the views)")
+    return size, samples, suns
+
+
+def _render_views(material, size, samples, suns, environments, hdri_samples, folder) -> list[SphereView]:
+    """``material`` on the reference sphere, one render per sun, then one per HDRI (in ``folder``)."""
+    views = []
+    for k, sun in enumerate(suns):
+        scene, spec = _reference_scene(material, size, samples, sun)
+        views.append(_render_view(scene, spec, folder, k))
+    for k, (path, environment) in enumerate(environments, start=len(suns)):
+        scene, spec = _reference_scene(material, size, hdri_samples, Sun(strength=0.0))
+        set_hdri_environment(path, environment.strength, scene)
+        views.append(_render_view(scene, spec, folder, k, environment))
+    return views
+
+
 def principled_views_of(material, *, size: int = DEFAULT_SIZE, samples: int = DEFAULT_SAMPLES,
                         suns: Sequence[Sun] = DEFAULT_SUNS, hdris: Sequence = (),
                         hdri_samples: int = ENVIRONMENT_SAMPLES) -> list[SphereView]:
@@ -257,23 +284,25 @@ def principled_views_of(material, *, size: int = DEFAULT_SIZE, samples: int = DE
     naming ``material``), as are a bad ``size`` or ``samples``, before anything is made.
     """
     check_principled(material)
-    size, samples = check_render_options(size, samples)
-    if isinstance(hdri_samples, bool) or not isinstance(hdri_samples, int) or not 1 <= hdri_samples <= 65536:
-        raise ParameterError("hdri_samples", hdri_samples, "an integer in [1, 65536]")
-    suns = tuple(suns)
-    if not all(isinstance(s, Sun) for s in suns) or not (suns or hdris):
-        raise ParameterError("suns", suns, "model.sphere.Sun values (one or more, unless HDRIs light the views)")
+    size, samples, suns = _check_views(size, samples, suns, hdris, hdri_samples)
     environments = [(Path(h), environment_of(h)) for h in hdris]
-    views = []
     with _temporary_data(), tempdirs.owned_tempdir("preview") as folder, _own_render_slot():
-        for k, sun in enumerate(suns):
-            scene, spec = _reference_scene(material, size, samples, sun)
-            views.append(_render_view(scene, spec, folder, k))
-        for k, (path, environment) in enumerate(environments, start=len(suns)):
-            scene, spec = _reference_scene(material, size, hdri_samples, Sun(strength=0.0))
-            set_hdri_environment(path, environment.strength, scene)
-            views.append(_render_view(scene, spec, folder, k, environment))
-    return views
+        return _render_views(material, size, samples, suns, environments, hdri_samples, folder)
+
+
+def layered_views(params: LayeredParams, *, size: int = DEFAULT_SIZE, samples: int = DEFAULT_SAMPLES,
+                  suns: Sequence[Sun] = DEFAULT_SUNS, hdris: Sequence = (),
+                  hdri_samples: int = ENVIRONMENT_SAMPLES, backend: str = "nodes") -> list[SphereView]:
+    """The layered material of ``params`` rendered as :func:`principled_views_of` renders a
+    Principled material (same scenes, suns, HDRIs, pixels and samples): what a fit to those
+    views is checked against (``fit --principled ... --verify``).  The material, its node groups,
+    texts and tables are made for the renders and removed with the scenes afterwards."""
+    size, samples, suns = _check_views(size, samples, suns, hdris, hdri_samples)
+    environments = [(Path(h), environment_of(h)) for h in hdris]
+    with _temporary_data(LAYERED_DATA), tempdirs.owned_tempdir("preview") as folder, _own_render_slot():
+        material = bpy.data.materials.new("Layered BRDF fit check")
+        apply_layered_material(material, params, backend=backend)
+        return _render_views(material, size, samples, suns, environments, hdri_samples, folder)
 
 
 def open_blend(blend_path) -> None:

@@ -123,7 +123,8 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
         guard.check()
         record_extra = {}
         if req.verify:
-            record_extra["verify"] = verify(loaded.target, loaded.record, result.params, guard)
+            record_extra["verify"] = verify(loaded.target, loaded.record, result.params, guard, req.principled,
+                                            req.verbose)
         record = {**fit_record(result, loaded, dict(req.start_record), argv, selection), **record_extra}
         note = structures.far_fit_note(record["mean_delta_e_2000"], selection is not None)
         if note is not None:
@@ -141,7 +142,8 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
         print(f"fit: warning: {note}", file=sys.stderr)
     if "verify" in record_extra:
         v = record_extra["verify"]
-        print(f"re-rendered: mean CIEDE2000 {v['mean_delta_e_2000']:.3f} over the sphere's {v['pixels']} pixels "
+        views = f" (per view {' / '.join(f'{d:.2f}' for d in v['per_view'])})" if len(v["per_view"]) > 1 else ""
+        print(f"re-rendered: mean CIEDE2000 {v['mean_delta_e_2000']:.3f} over the sphere's {v['pixels']} pixels{views} "
               f"(the fit's figure {record['mean_delta_e_2000']:.3f} over the same pixels computed in numpy)")
     return EXIT_OK
 

@@ -107,7 +107,7 @@ FIT_OPTIONS = (
                  choices=spec.options, group=START, job=False) for spec in PARAM_SPECS if spec.name in MODE_OPTIONS),
     OptionSpec("output", "output stem: writes OUT.json and OUT.png", OUTPUT_ALLOWED, as_given, ("fit",),
                defaults={"fit": "out/NAME-fit, NAME the target's"}, metavar="OUT", group=OUTPUT, job=False),
-    OptionSpec("verify", "render the fit as the target was rendered ('render', Cycles) and compare every pixel of "
-               "the sphere; OUT.json and the summary give both figures (a reference-sphere render's target)", "",
-               switch, ("fit",), action="store_true", group=OUTPUT, job=False, goes_with="target"),
+    OptionSpec("verify", "render the fit as the target was rendered (Cycles) and compare every pixel of the sphere; "
+               "OUT.json and the summary give both figures (a reference-sphere render's target or --principled)", "",
+               switch, ("fit",), action="store_true", group=OUTPUT, job=False),
 )

@@ -7,10 +7,14 @@ samples, seed and backend, and every pixel of the sphere is compared in the same
 fit's figure (CIELAB against the fit's white, CIEDE2000).  The render lives in a
 temporary folder, removed afterwards; nothing of it is left beside the outputs.
 
-A target that is not a render of the reference scene (a gallery's tile, a reflectance table, a
-Principled BSDF material) cannot be re-rendered this way: :func:`check_verifiable` says so before
-the fit, and :func:`check_camera` (a render with a camera of its own) once the target is read, before
-the fit too.
+A Principled BSDF target (``--principled``) was rendered in this process, on the reference sphere
+under its suns and HDRIs: the fitted layered material is rendered by Cycles in the same scenes (same
+suns, HDRIs, pixels and samples, :func:`layered_brdf_addon.blender.principled_target.layered_views`)
+and compared over every pixel of the sphere in every view, each view's figure given too.
+
+A gallery's tile (another camera) and a reflectance table (no render) cannot be re-rendered:
+:func:`check_verifiable` says so before the fit, and :func:`check_camera` (a render with a camera
+of its own) once the target is read, before the fit too.
 """
 from __future__ import annotations
 
@@ -18,31 +22,36 @@ import json
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..fit import colour_space
 from ..io.sidecar import camera_from_dict, read_sidecar
 from ..io.staging import OutputPaths
 from ..model.params import LayeredParams, ParameterError
 from ..model.sphere import OrthoCamera
 from .fit_targets import read_complete_beauty
+from .options import blender_output
 
-VERIFY_ALLOWED = "no value but with TARGET, a render of the reference sphere ('layered-brdf render' without --blend)"
+VERIFY_ALLOWED = ("no value but with TARGET, a render of the reference sphere ('layered-brdf render' without "
+                  "--blend), or with --principled")
 
 
 def check_verifiable(source, tile: Any) -> None:
-    """ParameterError naming ``verify`` unless the target is a reference-sphere render (a gallery's
-    tile has another camera; a table or a Principled BSDF material has no render to repeat)."""
-    if source.kind != "render" or tile is not None:
+    """ParameterError naming ``verify`` unless the target is a reference-sphere render or a Principled
+    BSDF material (a gallery's tile has another camera; a table has no render to repeat)."""
+    if source.kind not in ("render", "principled") or tile is not None:
         raise ParameterError("verify", True, VERIFY_ALLOWED)
 
 
 def check_camera(loaded_record: dict) -> None:
     """ParameterError naming ``verify`` unless the loaded render's camera is the reference scene's
-    (``render`` repeats no other): called once the target is read, before the fit."""
+    (``render`` repeats no other): called once the target is read, before the fit.  A Principled
+    target's renders are the reference scene's: nothing to check."""
+    if loaded_record["kind"] != "render":
+        return
     camera = read_sidecar(loaded_record["sidecar"])["camera"]
     if camera_from_dict(camera) != OrthoCamera(width=camera["width"], height=camera["height"]):
         raise ParameterError("verify", True, VERIFY_ALLOWED + " whose camera is the reference scene's")
@@ -57,10 +66,23 @@ def render_arguments(sidecar: dict, params_file: Path, stem: Path) -> list[str]:
             "--sun-strength", repr(float(sun["strength"])), "--output", str(stem)]
 
 
-def verify(target, loaded_record: dict, params: LayeredParams, guard=None) -> dict:
-    """The fitted ``params`` rendered as the target was and compared over every pixel of the sphere:
-    ``{"mean_delta_e_2000", "pixels", "render_seconds"}``.  A render that fails raises
-    RuntimeError with its last message."""
+def compare(target, images) -> dict:
+    """Every pixel of the fitted sphere in every view of ``target`` against ``images`` (one per view), in
+    the colour pipeline of the fit's figure (``SphereTarget.images_delta_e``):
+    ``{"mean_delta_e_2000", "pixels", "per_view"}``."""
+    per_view = target.images_delta_e(images)
+    de = np.concatenate(per_view)
+    return {"mean_delta_e_2000": float(np.mean(de)), "pixels": int(de.size),
+            "per_view": [float(np.mean(d)) for d in per_view]}
+
+
+def verify(target, loaded_record: dict, params: LayeredParams, guard=None, renders=None, verbose: bool = False) -> dict:
+    """The fitted ``params`` rendered as the target was and compared over every pixel of the sphere
+    (:func:`compare`, with ``render_seconds``): a reference-sphere render through ``render``, a Principled
+    target (``renders``: its :class:`~.fit_request.PrincipledRenders`) in its own scenes.  A render that
+    fails raises RuntimeError with its last message."""
+    if loaded_record["kind"] == "principled":
+        return verify_principled(target, params, renders, guard, verbose)
     sidecar = read_sidecar(loaded_record["sidecar"])
     with tempfile.TemporaryDirectory(prefix="layered-brdf-verify-") as folder:
         params_file = Path(folder) / "fit.json"
@@ -76,10 +98,21 @@ def verify(target, loaded_record: dict, params: LayeredParams, guard=None) -> di
             raise RuntimeError(f"--verify: the fit's render failed ({last})")
         image = read_complete_beauty(OutputPaths(stem).exr)
         seconds = read_sidecar(OutputPaths(stem).json).get("render_seconds")
-    mask = target.mask(0)
-    observed = np.asarray(target.views[0].image, dtype=float)[..., :3][mask]
-    rendered = np.asarray(image, dtype=float)[..., :3][mask]
-    white = target.white_y  # as the fit's reported figure (SphereTarget.image_delta_e)
-    de = colour_space.delta_e_2000(colour_space.lab(np.maximum(observed, 0.0), white),
-                                   colour_space.lab(np.maximum(rendered, 0.0), white))
-    return {"mean_delta_e_2000": float(np.mean(de)), "pixels": int(mask.sum()), "render_seconds": seconds}
+    return {**compare(target, [image]), "render_seconds": seconds}
+
+
+def verify_principled(target, params: LayeredParams, renders, guard=None, verbose: bool = False) -> dict:
+    """A Principled target's check: the layered material of ``params`` rendered by Cycles in the scenes
+    the material was rendered in (the target's suns, then ``renders.hdris``; its pixels and samples)."""
+    from ..blender.lookdev import hdri_path  # imports bpy: the target's renders loaded it already
+    from ..blender.principled_target import layered_views
+
+    suns = [v.sun for v in target.views if v.sun is not None]
+    t0 = time.perf_counter()
+    with blender_output(verbose):
+        views = layered_views(params, size=renders.size, samples=renders.samples, suns=suns,
+                              hdris=[hdri_path(name) for name in renders.hdris])
+    if guard is not None:
+        guard.arm()  # Blender may have replaced the handlers
+        guard.check()
+    return {**compare(target, [v.image for v in views]), "render_seconds": time.perf_counter() - t0}

@@ -270,13 +270,20 @@ class SphereTarget:
         itself reads a sample); None for a noise thickness, whose pattern numpy does not compute."""
         if self.matches_statistics(params):
             return None
-        white, out = self.white_y, []  # the fit's own white: one scale for the sample and the image
-        for k, view in enumerate(self.views):
+        per_view = self.images_delta_e([self.render(params, k) for k in range(len(self.views))])
+        return float(np.mean(np.concatenate(per_view)))
+
+    def images_delta_e(self, images: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """Per view, the CIEDE2000 of every pixel of the fitted sphere between the target's image and
+        ``images[k]`` (a render of the fit, or the closure form's :meth:`render`), on the fit's own
+        white: one scale for the sample the fit reads, its figure and a re-render's."""
+        out = []
+        for k, (view, image) in enumerate(zip(self.views, images, strict=True)):
             m = self.mask(k)
-            a = colour_space.lab(np.maximum(np.asarray(view.image, dtype=float)[..., :3][m], 0.0), white)
-            b = colour_space.lab(np.maximum(self.render(params, k)[m], 0.0), white)
+            a = colour_space.lab(np.maximum(np.asarray(view.image, dtype=float)[..., :3][m], 0.0), self.white_y)
+            b = colour_space.lab(np.maximum(np.asarray(image, dtype=float)[..., :3][m], 0.0), self.white_y)
             out.append(colour_space.delta_e_2000(a, b))
-        return float(np.mean(np.concatenate(out)))
+        return out
 
 
 def light_batches(points: Sequence[dict]) -> list[dict]:
