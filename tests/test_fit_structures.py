@@ -81,6 +81,40 @@ def test_finalists_are_the_best_few_and_any_close_behind(monkeypatch):
     assert [c.label for c in finalists(pool)] == ["c1", "c2"]
 
 
+def test_a_finalist_is_fitted_again_on_every_pixel_only_where_another_order_beats_its_own(monkeypatch):
+    """The second round (no finalist within GOOD_ENOUGH) fits each finalist's other thickness orders on a sample
+    first; the whole target is fitted again, from the best of them, only where that lies in another interference
+    order and beats the finalist's first fit on the same sample."""
+    calls = []
+    orders = {100.0: 1.5, 101.0: 2.5, 102.0: 1.0}  # c0's other orders beat its first fit (2.0 on the sample) ...
+    moved = {100.0: 500.0, 101.0: 500.0, 102.0: 10.0}  # ... and c2's, but in its first fit's order; c1's do not
+
+    def fit(target, start, vary=None, *, starts=3, steps_per_start=40, try_start=True, **how):
+        if target is screen:  # screening: c0 best, c1 next, c2 last
+            return structures.solve.FitResult(start, 1.0 + start.d_min - 100.0, 10, 0.0, ())
+        if steps_per_start == structures.REFINE_STEPS:  # the other orders, on the sample
+            assert starts > 0 and not try_start and target is sample
+            after = start.replace(d_min=start.d_min + moved[start.d_min])
+            return structures.solve.FitResult(after, orders[start.d_min], 10, 0.0, ())
+        assert target is whole
+        calls.append((start.d_min, starts, try_start))
+        return structures.solve.FitResult(start, 2.0, 10, 0.0, ())
+
+    whole, screen, sample = object(), object(), object()
+    monkeypatch.setattr(structures, "sample_target", lambda target, pixels: {
+        structures.SCREEN_PIXELS: screen, structures.REFINE_PIXELS: sample}[pixels])
+    monkeypatch.setattr(structures.solve, "fit", fit)
+    monkeypatch.setattr(structures.solve, "sample_delta_e", lambda target, params: 2.0)  # each first fit's figure
+    pool = [Candidate(f"c{k}", preset("soap_bubble").replace(d_min=100.0 + k)) for k in range(4)]
+    selection = select_and_fit(whole, pool)
+    # round 1: the three finalists from their screened starts; round 2: c0 alone, from its other order
+    assert calls == [(100.0, 0, True), (101.0, 0, True), (102.0, 0, True), (600.0, 0, True)]
+    assert selection.result.evaluations == 4 * 10 + 3 * 10 + 3 * 10 + 10
+    soap = preset("soap_bubble")  # 150-900 nm of index 1.33: a mean optical thickness of 700 nm
+    assert structures.other_order(soap, soap.replace(d_min=300.0, d_max=1000.0))  # 866 nm
+    assert not structures.other_order(soap, soap.replace(d_min=170.0))  # 713 nm
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("truth", [PAPER_TILTED, DIFFUSE_GLAZE], ids=["paper_tilted_diffuse", "diffuse_glaze"])
 def test_the_fit_finds_a_structure_that_renders_the_target(truth):

@@ -158,6 +158,14 @@ def colour_rows(target, params: LayeredParams):
     return target.colour_rows(params) if hasattr(target, "colour_rows") else slice(None)
 
 
+def sample_delta_e(target, params: LayeredParams) -> float:
+    """The mean CIEDE2000 a fit reports for ``params`` on ``target``'s comparison rows (its sample's pixels,
+    or the colours of a noise thickness's statistics)."""
+    c = colour_rows(target, params)
+    model = np.nan_to_num(model_features(target, params), nan=0.0, posinf=1e3, neginf=-1e3)
+    return float(np.mean(colour_space.delta_e_2000(model[c], features_observed(target, params)[c])))
+
+
 def _soft_l1(r: np.ndarray) -> float:
     z = (r / LOSS_SCALE) ** 2
     return float(np.sum(2.0 * (np.sqrt(1.0 + z) - 1.0)))

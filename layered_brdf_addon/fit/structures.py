@@ -22,10 +22,13 @@ explain the target and keeps the best:
 3. **The full fit** (:func:`select_and_fit`) of the best :data:`FINALISTS` (and any other within
    :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel, in two rounds:
    each from its screened start (the scan's best order on the sample), then, only where none came
-   within the fit's :data:`~.solve.GOOD_ENOUGH`, each from the full scan's other orders (layer
-   indices scanned too) -- the second round costs most of the time, and a finalist that already
-   matches makes it moot.  The lowest mean CIEDE2000 over every pixel of the sphere wins.  Every
-   candidate's figures are returned for the report.
+   within the fit's :data:`~.solve.GOOD_ENOUGH`, each through the full scan's other orders (layer
+   indices scanned too), fitted on a larger sample (:data:`REFINE_PIXELS`, :data:`REFINE_STEPS`
+   steps from each), and on every sampled pixel again only where the best of them lies in another
+   interference order (:func:`other_order`) and beats the finalist's own fit on that sample: a
+   finalist that finds its first order again costs a sample's scan, not a full fit.  The lowest mean
+   CIEDE2000 over every pixel of the sphere wins.  Every candidate's figures are returned for the
+   report.
 4. **The thickness pattern**: the candidates' thickness follows the surface's height (numpy
    reproduces it pixel by pixel).  Where the best of them stays over :data:`NOISE_TRIAL_DELTA_E`
    and the pattern is free (``try_noise``), its structure (unless its lower boundary follows the
@@ -54,6 +57,9 @@ SCREEN_PIXELS = 240  # the screening sample's pixels (every view together)
 SCREEN_STEPS = 6  # optimiser steps from the scan's best order, per candidate
 SCREEN_ORDERS = 1  # the scan's orders tried per candidate
 FINALISTS = 3
+REFINE_PIXELS = 500  # the second round's sample: each finalist's other orders are fitted on it first ...
+REFINE_STEPS = 12  # ... with this many optimiser steps each
+ORDER_APART_NM = 137.5  # optical thicknesses a quarter of 550 nm apart: half an interference order
 FAR_DELTA_E = 5.0  # a best fit this far from its target: the layered model does not show what it shows
 NOISE_TRIAL_DELTA_E = 1.0  # a best height fit over this tries a noise thickness too (where the pattern is free)
 NOISE_MARGIN = 0.8  # ... which wins where its statistics figure is below this share of the height fit's
@@ -195,10 +201,10 @@ def _metal(p: LayeredParams) -> bool:
     return min(p.k2_r, p.k2_g, p.k2_b) > METAL_K
 
 
-def screening_target(target):
-    """A small sample of ``target``'s pixels for screening (a sphere target), else the target."""
-    if isinstance(target, SphereTarget) and target.pixels > SCREEN_PIXELS:
-        return SphereTarget(target.views, pixels=SCREEN_PIXELS)
+def sample_target(target, pixels: int = SCREEN_PIXELS):
+    """A sample of ``pixels`` of ``target``'s pixels (a sphere target), else the target."""
+    if isinstance(target, SphereTarget) and target.pixels > pixels:
+        return SphereTarget(target.views, pixels=pixels)
     return target
 
 
@@ -212,6 +218,16 @@ class Selection:
 
     def to_record(self) -> list[dict]:
         return [c.to_record() for c in self.candidates]
+
+
+def other_order(a: LayeredParams, b: LayeredParams) -> bool:
+    """Whether two films' mean optical thicknesses (the green index times the mean thickness) lie
+    :data:`ORDER_APART_NM` or more apart: another interference order, which a fit from one does not
+    reach from the other (within it, a full fit from either ends alike)."""
+    def optical(p: LayeredParams) -> float:
+        return p.r1_g * 0.5 * (p.d_min + p.d_max)
+
+    return abs(optical(a) - optical(b)) >= ORDER_APART_NM
 
 
 def finalists(screened: Sequence[Candidate]) -> list[Candidate]:
@@ -232,7 +248,7 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
     (:class:`~.solve.FitCancelled`)."""
     t0 = time.perf_counter()
     total = 0
-    small = screening_target(target)
+    small = sample_target(target, SCREEN_PIXELS)
     pool = [replace(c) for c in pool]
 
     def hearing(stage: str):
@@ -252,10 +268,11 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
     last = finalists(pool)
     noise = try_noise and isinstance(target, SphereTarget)
 
-    def full_fit(c: Candidate, stage: str, **how) -> None:
-        """Fit ``c`` on the whole target; keep the result where it beats the candidate's last."""
+    def full_fit(c: Candidate, stage: str, start: LayeredParams | None = None, **how) -> None:
+        """Fit ``c`` (from ``start``, else its screened start) on the whole target; keep the result where it
+        beats the candidate's last."""
         nonlocal total
-        result = solve.fit(target, c.start, vary, steps_per_start=steps_per_start, progress=hearing(stage),
+        result = solve.fit(target, start or c.start, vary, steps_per_start=steps_per_start, progress=hearing(stage),
                            should_stop=should_stop, **how)
         total += result.evaluations
         figure = target.image_delta_e(result.params) if hasattr(target, "image_delta_e") else None
@@ -266,8 +283,15 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
     for k, c in enumerate(last):  # each finalist from its screened start (its scan's best order)
         full_fit(c, f"fit {k + 1}/{len(last)}", starts=0)
     if min(c.delta_e for c in last) > solve.GOOD_ENOUGH and starts > 0:  # none matches yet: the other orders
-        for k, c in enumerate(last):
-            full_fit(c, f"refine {k + 1}/{len(last)}", starts=starts, try_start=False)
+        middle = sample_target(target, REFINE_PIXELS)
+        for k, c in enumerate(last):  # each on a sample first; the whole target only where an order beats its own
+            stage = f"refine {k + 1}/{len(last)}"
+            orders = solve.fit(middle, c.start, vary, starts=starts, steps_per_start=REFINE_STEPS,
+                               progress=hearing(stage), should_stop=should_stop, try_start=False)
+            total += orders.evaluations
+            if other_order(orders.params, c.result.params) and \
+                    orders.mean_delta_e < solve.sample_delta_e(middle, c.result.params):
+                full_fit(c, stage, orders.params, starts=0)
     chosen = min(last, key=Candidate.figure)
     best = chosen.result
     if (noise and chosen.figure() > NOISE_TRIAL_DELTA_E and chosen.start.thickness_mode != "noise"
