@@ -65,7 +65,7 @@ class _Objective:
         self._last = None  # (x, residuals) of the last single evaluation: the slopes start there
 
     def features(self, params: LayeredParams) -> np.ndarray:
-        return np.nan_to_num(model_features(self.target, params), nan=0.0, posinf=1e3, neginf=-1e3)
+        return _finite(model_features(self.target, params))
 
     def _count(self) -> None:
         """One evaluation more: the caller may stop the fit, and hears how far it is."""
@@ -82,7 +82,7 @@ class _Objective:
         for x in xs:
             self._count()
             params.append(self.free.params(x))
-        feats = np.nan_to_num(model_features_many(self.target, params), nan=0.0, posinf=1e3, neginf=-1e3)
+        feats = _finite(model_features_many(self.target, params))
         return ((feats - self.observed) * self.weights).reshape(len(params), -1)
 
     def __call__(self, x) -> np.ndarray:
@@ -102,8 +102,7 @@ class _Objective:
         return ((self.residuals(xs) - f0) / dx[:, None]).T
 
     def mean_delta_e(self, params: LayeredParams) -> float:
-        c = self.colours
-        return float(np.mean(colour_space.delta_e_2000(self.features(params)[c], self.observed[c])))
+        return _mean_delta_e(self.features(params), self.observed, self.colours)
 
 
 def difference_steps(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -158,12 +157,20 @@ def colour_rows(target, params: LayeredParams):
     return target.colour_rows(params) if hasattr(target, "colour_rows") else slice(None)
 
 
+def _finite(features: np.ndarray) -> np.ndarray:
+    """The model's CIELAB rows with NaN and infinities (a diverging parameter set) made finite and far."""
+    return np.nan_to_num(features, nan=0.0, posinf=1e3, neginf=-1e3)
+
+
+def _mean_delta_e(model: np.ndarray, observed: np.ndarray, rows) -> float:
+    return float(np.mean(colour_space.delta_e_2000(model[rows], observed[rows])))
+
+
 def sample_delta_e(target, params: LayeredParams) -> float:
     """The mean CIEDE2000 a fit reports for ``params`` on ``target``'s comparison rows (its sample's pixels,
     or the colours of a noise thickness's statistics)."""
-    c = colour_rows(target, params)
-    model = np.nan_to_num(model_features(target, params), nan=0.0, posinf=1e3, neginf=-1e3)
-    return float(np.mean(colour_space.delta_e_2000(model[c], features_observed(target, params)[c])))
+    return _mean_delta_e(_finite(model_features(target, params)), features_observed(target, params),
+                         colour_rows(target, params))
 
 
 def _soft_l1(r: np.ndarray) -> float:
