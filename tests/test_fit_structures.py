@@ -115,6 +115,23 @@ def test_a_finalist_is_fitted_again_on_every_pixel_only_where_another_order_beat
     assert not structures.other_order(soap, soap.replace(d_min=170.0))  # 713 nm
 
 
+def test_a_target_with_nothing_to_sample_fits_every_order_in_full(monkeypatch):
+    """A reflectance table (a few colours, cheap to evaluate) is not sampled: the second round fits each
+    finalist's other orders on the whole target with every step (12 steps from the scan's orders missed
+    TiO2's own order on titanium: n d 549 nm where tmm's is 297)."""
+    calls = []
+
+    def fit(target, start, vary=None, *, starts=3, steps_per_start=40, try_start=True, **how):
+        calls.append((steps_per_start, starts, try_start))
+        return structures.solve.FitResult(start, 2.0, 10, 0.0, ())
+
+    monkeypatch.setattr(structures.solve, "fit", fit)
+    target = object()  # no SphereTarget: sample_target gives it back
+    select_and_fit(target, [Candidate(f"c{k}", preset("soap_bubble")) for k in range(3)], steps_per_start=40)
+    refine = calls[3 + 3:]
+    assert refine == [(40, 3, False)] * 3
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("truth", [PAPER_TILTED, DIFFUSE_GLAZE], ids=["paper_tilted_diffuse", "diffuse_glaze"])
 def test_the_fit_finds_a_structure_that_renders_the_target(truth):

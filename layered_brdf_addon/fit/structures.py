@@ -26,7 +26,8 @@ explain the target and keeps the best:
    indices scanned too), fitted on a larger sample (:data:`REFINE_PIXELS`, :data:`REFINE_STEPS`
    steps from each), and on every sampled pixel again only where the best of them lies in another
    interference order (:func:`other_order`) and beats the finalist's own fit on that sample: a
-   finalist that finds its first order again costs a sample's scan, not a full fit.  The lowest mean
+   finalist that finds its first order again costs a sample's scan, not a full fit.  A target with
+   nothing to sample (a reflectance table: a few colours) fits every order in full.  The lowest mean
    CIEDE2000 over every pixel of the sphere wins.  Every candidate's figures are returned for the
    report.
 4. **The thickness pattern**: the candidates' thickness follows the surface's height (numpy
@@ -286,6 +287,9 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
         middle = sample_target(target, REFINE_PIXELS)
         for k, c in enumerate(last):  # each on a sample first; the whole target only where an order beats its own
             stage = f"refine {k + 1}/{len(last)}"
+            if middle is target:  # nothing to sample (a table, a small image): every order on the whole target
+                full_fit(c, stage, starts=starts, try_start=False)
+                continue
             orders = solve.fit(middle, c.start, vary, starts=starts, steps_per_start=REFINE_STEPS,
                                progress=hearing(stage), should_stop=should_stop, try_start=False)
             total += orders.evaluations
