@@ -273,7 +273,8 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
         """Fit ``c`` (from ``start``, else its screened start) on the whole target; keep the result where it
         beats the candidate's last."""
         nonlocal total
-        result = solve.fit(target, start or c.start, vary, steps_per_start=steps_per_start, progress=hearing(stage),
+        first = c.start if start is None else start
+        result = solve.fit(target, first, vary, steps_per_start=steps_per_start, progress=hearing(stage),
                            should_stop=should_stop, **how)
         total += result.evaluations
         figure = target.image_delta_e(result.params) if hasattr(target, "image_delta_e") else None
