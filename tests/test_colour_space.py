@@ -71,6 +71,13 @@ def test_lab_agrees_with_colour_science(rgb, white_y):
     assert np.allclose(colour_space.lab(rgb, white_y), want, rtol=1e-9, atol=1e-9)
 
 
+def test_a_white_per_colour_is_each_colour_s_own():
+    rng = np.random.default_rng(5)
+    rgb, whites = rng.uniform(0.0, 4.0, (2, 9, 3)), rng.uniform(0.1, 5.0, 9)
+    each = np.stack([[colour_space.lab(rgb[i, j], whites[j]) for j in range(9)] for i in range(2)])
+    assert np.allclose(colour_space.lab(rgb, whites), each, rtol=1e-12, atol=1e-12)
+
+
 def test_a_spectrum_gives_colour_science_s_colour():
     rng = np.random.default_rng(3)
     lams = np.arange(360.0, 831.0, 5.0)

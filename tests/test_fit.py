@@ -7,7 +7,9 @@ import pytest
 
 from layered_brdf_addon.fit.free import FreeParameters, check_vary, default_vary, film_vary
 from layered_brdf_addon.fit.solve import FitCancelled, fit
-from layered_brdf_addon.fit.targets import ReflectanceTarget, SphereTarget, SphereView, TargetError, noise_levels
+from layered_brdf_addon.fit import colour_space
+from layered_brdf_addon.fit.targets import (DARKEST_WHITE, ReflectanceTarget, SphereTarget, SphereView, TargetError,
+                                              noise_levels)
 from layered_brdf_addon.model.params import ParameterError
 from layered_brdf_addon.model.presets import preset
 from layered_brdf_reference.fit_cases import CAMERA, FILMS, SUNS, held_out, image_delta_e, tmm_rows, views_of
@@ -36,6 +38,33 @@ def test_two_suns_pin_the_material_down():
         assert getattr(result.params, name) == pytest.approx(getattr(truth, name), rel=0.05)
     # The Roughness (the artist's unit, e0 = (Roughness^-4 - 1) / 2) within 3%.
     assert result.params.e0 ** -0.25 == pytest.approx(truth.e0 ** -0.25, rel=0.03)
+
+
+def test_each_view_is_measured_on_its_own_white():
+    # Two views of one material; the second rendered 8 times brighter (a stronger light): each is put
+    # on the CIELAB scale by its own bright end, so a fit's difference in one view does not change
+    # with another view's exposure, and the darker view keeps its weight.
+    truth = preset("oil_slick").replace(thickness_mode="height")
+    other = truth.replace(d_min=150, d_max=900)
+    [a, b] = views_of(truth, SUNS)
+    bright = SphereView(a.image * 8.0, a.camera, a.sun)
+    for pair in ([a, b], [bright, b]):
+        target = SphereTarget(pair)
+        assert target.view_whites[0] == pytest.approx(colour_space.white_of(target._points[0]["observed"]))
+        fitted = [target.render(other, k) * (8.0 if pair[0] is bright and k == 0 else 1.0) for k in range(2)]
+        per_view = target.images_delta_e(fitted)
+        if pair[0] is a:
+            before = per_view
+    for now, then in zip(per_view, before):
+        assert now == pytest.approx(then, rel=1e-9, abs=1e-12)
+        assert then.max() > 5.0  # two different films, where the sun lights them
+
+
+def test_a_view_almost_black_is_measured_on_a_share_of_the_brightest_white():
+    [a, b] = views_of(preset("soap_bubble"), SUNS)
+    target = SphereTarget([a, SphereView(b.image * 1e-4, b.camera, b.sun)])
+    assert target.view_whites[1] == pytest.approx(DARKEST_WHITE * target.view_whites[0])
+    assert target.white_y.shape == (len(target.observed),)
 
 
 def test_only_the_named_parameters_move():

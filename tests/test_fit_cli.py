@@ -90,7 +90,7 @@ def image_delta_e(target_image: np.ndarray, params: LayeredParams, size: int, su
     camera = OrthoCamera(width=size, height=size)
     mask = sphere_geometry(camera).mask
     fitted = render_spheres([params], camera, sun, shading=closure_shading)[0]
-    white = SphereTarget([SphereView(target_image, camera, sun)]).white_y
+    white = SphereTarget([SphereView(target_image, camera, sun)]).view_whites[0]
     return colour_space.delta_e_2000(colour_space.lab(np.maximum(target_image[mask], 0.0), white),
                                      colour_space.lab(fitted[mask], white))
 

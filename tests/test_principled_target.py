@@ -177,11 +177,11 @@ CONVERSIONS = {
 }
 
 
-def rendered_delta_e(params, views, white_y) -> list[float]:
+def rendered_delta_e(params, views, whites) -> list[float]:
     """Per view: the mean CIEDE2000 between the target and the layered material of ``params``
-    rendered by Cycles in the reference scene, over the sphere's lit pixels."""
+    rendered by Cycles in the reference scene, over the sphere's lit pixels, on the view's white."""
     out = []
-    for view in views:
+    for view, white_y in zip(views, whites, strict=True):
         reset_blender()
         [sphere] = build_scene(SceneSpec(camera=view.camera, sun=view.sun, centers=view.centers))
         apply_layered_material(sphere, params)
@@ -202,7 +202,7 @@ def test_a_principled_thin_film_converts_to_a_layered_material(name):
     t0, cpu0 = time.perf_counter(), time.process_time()
     result = fit_operator.run_fit(views, start_for(preset(start), material))
     seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
-    rendered = rendered_delta_e(result.params, views, SphereTarget(views).white_y)
+    rendered = rendered_delta_e(result.params, views, SphereTarget(views).view_whites)
     print(f"{name} from {start}: fitted mean CIEDE2000 {result.mean_delta_e:.2f}, rendered "
           f"{', '.join(f'{d:.2f}' for d in rendered)}; {result.evaluations} evaluations, {seconds:.0f} s "
           f"({cpu:.0f} s CPU)")

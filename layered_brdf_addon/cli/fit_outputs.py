@@ -118,8 +118,7 @@ def sphere_figure(target, params: LayeredParams, mean_delta_e: float, structure:
         observed = np.where(mask[..., None], np.asarray(view.image, dtype=float)[..., :3], 0.0)
         fitted = target.render(params, k)
         de = np.full(mask.shape, np.nan)
-        de[mask] = colour_space.delta_e_2000(colour_space.lab(np.maximum(observed[mask], 0.0), target.white_y),
-                                             colour_space.lab(np.maximum(fitted[mask], 0.0), target.white_y))
+        de[mask] = target.view_delta_e(k, fitted)
         suffix = f" (sun {k + 1})" if rows > 1 else ""
         panels = [(to_srgb8(observed[box]), "target" + suffix),
                   (to_srgb8(fitted[box]), "fit" + (" at the noise's median thickness" if noise else "")),

@@ -39,9 +39,12 @@ def xyz_to_lab(xyz) -> np.ndarray:
                      200.0 * (f[..., 1] - f[..., 2])], axis=-1)
 
 
-def lab(rgb, white_y: float = 1.0) -> np.ndarray:
-    """CIE L*a*b* (D65) of scene-linear Rec.709 RGB (last axis), ``white_y`` the luminance of white."""
-    return xyz_to_lab(np.asarray(rgb, dtype=float) @ _matrix().T / max(float(white_y), 1e-12))
+def lab(rgb, white_y=1.0) -> np.ndarray:
+    """CIE L*a*b* (D65) of scene-linear Rec.709 RGB (last axis), ``white_y`` the luminance of white:
+    one number, or one per colour (an array of ``rgb``'s shape without its last axis, or one that
+    broadcasts to it)."""
+    white = np.maximum(np.asarray(white_y, dtype=float), 1e-12)[..., None]
+    return xyz_to_lab(np.asarray(rgb, dtype=float) @ _matrix().T / white)
 
 
 def luminance(rgb) -> np.ndarray:

@@ -3,7 +3,7 @@
 A target holds observed colours and predicts them from parameters with the numpy backend
 of the shading program.  Both kinds give ``observed`` (N, 3) linear RGB and
 ``predict(params)`` of the same shape, and ``white_y``, the luminance their colours are
-measured against (:mod:`.colour_space`).
+measured against (:mod:`.colour_space`): a sphere target's per sampled pixel, its view's.
 """
 from __future__ import annotations
 
@@ -45,6 +45,10 @@ NOISE_LEVELS = 7  # thickness levels a noise's colours are averaged over
 # the run's temporaries (16 sets of 1,500 pixels: arrays of 600 kB, twice that through a
 # transparent base, whose far side is shaded too).
 STACK_SETS = 16
+# Each view's colours are measured against its own white (one image, one exposure: as a render of
+# the fit is judged), never below this share of the brightest view's, so that a view whose sphere
+# is almost black (a sun behind it) does not make its noise the fit's largest differences.
+DARKEST_WHITE = 0.1
 
 
 def noise_levels(detail: float) -> np.ndarray:
@@ -104,7 +108,10 @@ class SphereTarget:
         if max(p["lit"] for p in self._points) < LIT_FRACTION:
             raise TargetError("the target's sphere is black: there is nothing to fit")
         self.observed = obs
-        self.white_y = colour_space.white_of(obs)
+        whites = [colour_space.white_of(p["observed"]) for p in self._points]
+        self.view_whites = [max(w, DARKEST_WHITE * max(whites)) for w in whites]
+        self.white_y = np.concatenate([np.full(len(p["observed"]), w)
+                                       for p, w in zip(self._points, self.view_whites)])
         self._batches = light_batches(self._points)
 
     @staticmethod
@@ -275,15 +282,19 @@ class SphereTarget:
 
     def images_delta_e(self, images: Sequence[np.ndarray]) -> list[np.ndarray]:
         """Per view, the CIEDE2000 of every pixel of the fitted sphere between the target's image and
-        ``images[k]`` (a render of the fit, or the closure form's :meth:`render`), on the fit's own
-        white: one scale for the sample the fit reads, its figure and a re-render's."""
-        out = []
-        for k, (view, image) in enumerate(zip(self.views, images, strict=True)):
-            m = self.mask(k)
-            a = colour_space.lab(np.maximum(np.asarray(view.image, dtype=float)[..., :3][m], 0.0), self.white_y)
-            b = colour_space.lab(np.maximum(np.asarray(image, dtype=float)[..., :3][m], 0.0), self.white_y)
-            out.append(colour_space.delta_e_2000(a, b))
-        return out
+        ``images[k]`` (a render of the fit, or the closure form's :meth:`render`), on the view's
+        white the fit reads it by: one scale for the sample the fit reads, its figure and a re-render's."""
+        if len(images) != len(self.views):
+            raise ValueError(f"{len(images)} images for {len(self.views)} views")
+        return [self.view_delta_e(k, image) for k, image in enumerate(images)]
+
+    def view_delta_e(self, view: int, image: np.ndarray) -> np.ndarray:
+        """The CIEDE2000 of every pixel of the fitted sphere in view ``view`` between the target's
+        image and ``image``, on the view's white (:data:`DARKEST_WHITE`)."""
+        m, white = self.mask(view), self.view_whites[view]
+        a, b = (colour_space.lab(np.maximum(np.asarray(x, dtype=float)[..., :3][m], 0.0), white)
+                for x in (self.views[view].image, image))
+        return colour_space.delta_e_2000(a, b)
 
 
 def light_batches(points: Sequence[dict]) -> list[dict]:
