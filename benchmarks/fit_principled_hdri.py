@@ -90,14 +90,15 @@ def main(argv=None) -> None:
             hdris = [lookdev.hdri_path(h) for h in args.fit_hdris]
             views = principled_target.principled_views_of(material, hdris=hdris)
             t0, cpu0 = time.perf_counter(), time.process_time()
+            uniform = principled_target.uniform_film(material)
             if args.select:
-                selection = run_selection(views, surface=principled_target.surface_of(material))
+                selection = run_selection(views, surface=principled_target.surface_of(material), uniform_film=uniform)
                 result, start = selection.result, selection.chosen.label
             else:
-                result = run_fit(views, principled_target.start_for(preset(start), material))
+                result = run_fit(views, principled_target.start_for(preset(start), material), uniform_film=uniform)
             seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
             # The fit's own views rendered again with the fitted material (what 'fit --verify' reports).
-            target = sphere_target(views)
+            target = sphere_target(views, uniform)
             fitted = target.image_delta_e(result.params)  # the figure 'fit' reports: every pixel, the closure form
             again = principled_target.layered_views(result.params, hdris=hdris)
             rerendered = np.mean(np.concatenate(target.images_delta_e([v.image for v in again])))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from layered_brdf_addon.fit.free import FreeParameters, check_vary, default_vary, film_vary
+from layered_brdf_addon.fit.free import FreeParameters, check_vary, default_vary, film_vary, vary_for
 from layered_brdf_addon.fit.solve import FitCancelled, fit
 from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.targets import (DARKEST_WHITE, ReflectanceTarget, SphereTarget, SphereView, TargetError,
@@ -65,6 +65,21 @@ def test_a_view_almost_black_is_measured_on_a_share_of_the_brightest_white():
     target = SphereTarget([a, SphereView(b.image * 1e-4, b.camera, b.sun)])
     assert target.view_whites[1] == pytest.approx(DARKEST_WHITE * target.view_whites[0])
     assert target.white_y.shape == (len(target.observed),)
+
+
+def test_a_film_of_one_thickness_varies_its_thickness_as_one():
+    start = preset("oil_slick").replace(thickness_mode="height")
+    uniform = SphereTarget(views_of(start.replace(d_min=350.0, d_max=350.0)), uniform_film=True)
+    assert "d_max" not in vary_for(uniform, start) and "d_min" in vary_for(uniform, start)
+    assert vary_for(uniform, start, ["d_min", "d_max", "e0"]) == ("d_min", "e0")
+    with pytest.raises(ParameterError, match="'vary'.*d_min for a film of one thickness"):
+        vary_for(uniform, start, ["d_max"])
+    free = FreeParameters(("d_min", "e0"), start, uniform=True)
+    moved = free.params(free.vector(start.replace(d_min=420.0)))
+    assert moved.d_min == moved.d_max == pytest.approx(420.0)
+    result = fit(uniform, start, starts=1)  # from the middle of the start's 100-600 nm
+    assert result.params.d_min == result.params.d_max == pytest.approx(350.0, rel=0.03)
+    assert result.mean_delta_e <= ROUND_TRIP_DELTA_E
 
 
 def test_only_the_named_parameters_move():

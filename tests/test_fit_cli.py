@@ -468,7 +468,13 @@ def test_a_principled_material_is_fitted(tmp_path, principled_blend, material, o
     assert record["target"]["hdris"] == ["forest.exr"]
     assert record["target"]["material"] == material
     assert record["target"]["surface"] == {"TitaniumFilm": "metal", "PearlFilm": "dielectric"}[material]
-    if not options:  # no start: only the structures of the material's own surface (a diffuse base) were tried
+    assert record["target"]["uniform_film"] is True  # a film of one thickness, fitted as one
+    film = fitted_params(tmp_path / "out" / "m.json")
+    assert film.d_min == film.d_max
+    if not options:
+        assert {s["modes"]["normal_mode"] for s in record["structures"]} == {"parallel"}
+    if not options:  # no start: only the structures of the material's own surface (a diffuse base) were tried,
+        # with a parallel lower boundary (the film has one thickness)
         assert record["structures"] and {s["modes"]["base_layer"] for s in record["structures"]} == {"none"}
     assert record["mean_delta_e_2000"] <= PRINCIPLED_DELTA_E
     if "--verify" in options:

@@ -261,6 +261,7 @@ def test_choosing_the_structure_for_a_principled_material_tries_the_structures_o
     monkeypatch.setattr(fit_operator, "run_selection", selection)
     result = bpy.ops.layered_brdf.fit_to_render(source="PRINCIPLED", principled=film.name, start="CHOOSE")
     assert result == {"CANCELLED"} and heard["surface"] == "metal" and heard["try_noise"] is False
+    assert heard["uniform_film"] is True  # a film of one thickness: fitted as one, over a parallel boundary
     assert obj.active_material is None
 
 

@@ -293,3 +293,26 @@ def test_an_unknown_surface_or_a_pinned_base_keeps_the_whole_pool():
     assert structures.for_surface(pool, None) == pool
     clear = candidates({"base_layer": "transparent"}, thickness_mode="height")
     assert structures.for_surface(clear, "metal") == clear  # the user's pin wins over the material
+
+
+def test_a_film_of_one_thickness_keeps_the_parallel_boundary_unless_the_user_pinned_another():
+    # A tilted lower boundary, or one that follows the thickness's slope, needs a thickness that varies.
+    pool = candidates(thickness_mode="height")
+    kept = structures.for_material(pool, "metal", uniform_film=True)
+    assert kept and {c.start.normal_mode for c in kept} == {"parallel"}
+    assert {c.start.base_layer for c in kept} == {"metal"}
+    assert structures.for_material(pool, "metal") == structures.for_surface(pool, "metal")
+    tilted = candidates({"normal_mode": "tilted"}, thickness_mode="height")
+    assert structures.for_material(tilted, None, uniform_film=True) == tilted
+    assert structures.structure_pool(surface="metal", uniform_film=True) == kept
+
+
+def test_a_target_of_one_thickness_is_fitted_by_a_film_of_one_thickness_on_every_sample():
+    truth = preset("oil_slick").replace(thickness_mode="height", d_min=350.0, d_max=350.0)
+    target = SphereTarget(views_of(truth), uniform_film=True)
+    assert structures.sample_target(target, 200).uniform_film
+    result = select_and_fit(target, structures.structure_pool(surface="dielectric", uniform_film=True), starts=1,
+                            steps_per_start=20)
+    assert result.result.params.d_min == result.result.params.d_max
+    assert image_delta_e(target, result.result.params) <= 1.0
+

@@ -34,7 +34,7 @@ from .animation import animated_parameters
 from .lookdev import hdri_path
 from .material_values import is_layered, layered_material_of, params_of, settings
 from .own_nodes import shader_node
-from .principled_target import principled_materials, principled_views_of, start_for, surface_of
+from .principled_target import principled_materials, principled_views_of, start_for, surface_of, uniform_film
 from .sidecar_views import sidecar_views
 from .targets import object_problem, takes_layered_material
 
@@ -52,9 +52,10 @@ STAGE_WORDS = {"screen": "screening structure", "fit": "fitting finalist", "refi
 NO_MATERIAL = "__none__"  # the file holds no Principled material
 
 
-def sphere_target(target_views):
-    """The views as a :class:`~..fit.targets.SphereTarget` (TargetError says why they cannot be one)."""
-    return SphereTarget(list(target_views))
+def sphere_target(target_views, uniform_film: bool = False):
+    """The views as a :class:`~..fit.targets.SphereTarget` (TargetError says why they cannot be one);
+    ``uniform_film``: they show a film of one thickness (a Principled material's), fitted as one."""
+    return SphereTarget(list(target_views), uniform_film=uniform_film)
 
 
 def expected_evaluations(start: LayeredParams, starts: int = 3, steps_per_start: int = 40,
@@ -113,25 +114,25 @@ def start_of(target) -> LayeredParams | None:
 
 # ---------------------------------------------------------------------------
 def run_fit(target_views, start: LayeredParams, *, progress: Callable[[int], None] | None = None,
-            should_stop: Callable[[], bool] | None = None, **options):
+            should_stop: Callable[[], bool] | None = None, uniform_film: bool = False, **options):
     """Fit ``start`` to the views (``options``: :func:`..fit.solve.fit`'s, over
-    :data:`FIT_OPTIONS`); the :class:`~..fit.solve.FitResult`.  Touches no Blender data: it
-    may run in any thread."""
-    return solve.fit(sphere_target(target_views), start.validate(), progress=progress, should_stop=should_stop,
-                     **{**FIT_OPTIONS, **options})
+    :data:`FIT_OPTIONS`; ``uniform_film``: a film of one thickness, :func:`sphere_target`); the
+    :class:`~..fit.solve.FitResult`.  Touches no Blender data: it may run in any thread."""
+    return solve.fit(sphere_target(target_views, uniform_film), start.validate(), progress=progress,
+                     should_stop=should_stop, **{**FIT_OPTIONS, **options})
 
 
 def run_selection(target_views, *, progress: Callable[[str, int], None] | None = None,
                   should_stop: Callable[[], bool] | None = None, try_noise: bool = False,
-                  surface: str | None = None, **options):
+                  surface: str | None = None, uniform_film: bool = False, **options):
     """The fit with no start: every structure screened, the best fitted in full
     (:func:`..fit.structures.select_and_fit`, the thickness by height as the command line's, or for a
     render a noise pattern where height stays far: ``try_noise``; for a Principled material the
-    structures of its ``surface``, :func:`..fit.structures.for_surface`); its
+    structures of its ``surface`` and of a ``uniform_film``, :func:`..fit.structures.for_material`); its
     :class:`~..fit.structures.Selection`.  Touches no Blender data: it may run in any thread."""
     options = {**FIT_OPTIONS, **options}
-    pool = structures.structure_pool(surface=surface)
-    return structures.select_and_fit(sphere_target(target_views), pool, options.pop("vary", None),
+    pool = structures.structure_pool(surface=surface, uniform_film=uniform_film)
+    return structures.select_and_fit(sphere_target(target_views, uniform_film), pool, options.pop("vary", None),
                                      progress=progress, should_stop=should_stop, try_noise=try_noise, **options)
 
 
@@ -195,6 +196,7 @@ class FitJob:
     stage: str = ""  # with no start: "screen K/N" or "fit K/N"
     try_noise: bool = False  # with no start: a noise thickness may be chosen (a render's target)
     surface: str | None = None  # with no start: what a Principled target's material says its surface is
+    uniform_film: bool = False  # a Principled target's film has one thickness: fitted as one
     result: object = None
     error: BaseException | None = None
 
@@ -212,10 +214,11 @@ class FitJob:
         try:
             if self.start is None:
                 self.result = run_selection(self.target_views, progress=self._hear, should_stop=self._stop.is_set,
-                                            try_noise=self.try_noise, surface=self.surface, **self.options).result
+                                            try_noise=self.try_noise, surface=self.surface,
+                                            uniform_film=self.uniform_film, **self.options).result
             else:
                 self.result = run_fit(self.target_views, self.start, progress=self._count,
-                                      should_stop=self._stop.is_set, **self.options)
+                                      should_stop=self._stop.is_set, uniform_film=self.uniform_film, **self.options)
         except BaseException as e:  # handed to the main thread, which reports it
             self.error = e
 
@@ -368,8 +371,10 @@ material of this file (Esc cancels)"""
         self._target_kind = "objects" if isinstance(target, bpy.types.Object) else "materials"
         self._target_pointer = target.as_pointer()
         self._target_name = target.name
-        surface = surface_of(self._principled_material()) if self.source == "PRINCIPLED" else None
-        self._job = FitJob(views, start, dict(FIT_OPTIONS), try_noise=self.source == "RENDER", surface=surface)
+        principled = self._principled_material() if self.source == "PRINCIPLED" else None
+        self._job = FitJob(views, start, dict(FIT_OPTIONS), try_noise=principled is None,
+                           surface=None if principled is None else surface_of(principled),
+                           uniform_film=principled is not None and uniform_film(principled))
         if bpy.app.background or context.window is None:  # no event loop to wait in
             self._job.begin().wait()
             return self._finish(context)

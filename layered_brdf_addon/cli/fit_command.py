@@ -33,7 +33,7 @@ from dataclasses import replace
 from typing import Callable, Sequence
 
 from ..fit import solve, structures
-from ..fit.free import default_vary, film_vary
+from ..fit.free import vary_for
 from ..fit.solve import FitCancelled
 from ..io.staging import InterruptGuard
 from ..model.params import LayeredParams
@@ -52,8 +52,7 @@ def fit_with_progress(target, start: LayeredParams, vary, starts: int, enabled: 
     standard error (its total the most the fit can take)."""
     from tqdm import tqdm
 
-    uniform = getattr(target, "uniform_film", False)
-    names = vary if vary is not None else (film_vary if uniform else default_vary)(start)
+    names = vary_for(target, start, vary)
     scan = solve.THICKNESS_SCAN_STEPS * (1 + len(solve.SCAN_HALF_WIDTHS))
     most = scan + (starts + 1) * STEPS_PER_START * (len(names) + 1)
     bar = tqdm(total=most, desc="fit", unit="eval", file=sys.stderr, disable=not enabled, dynamic_ncols=True)
@@ -113,7 +112,8 @@ def run_fit(req: FitRequest, argv: Sequence[str] | None = None) -> int:
         try:
             if req.pool:
                 if source.kind == "principled":  # the material says what its surface is
-                    req = replace(req, pool=tuple(structures.for_surface(req.pool, loaded.record["surface"])))
+                    req = replace(req, pool=tuple(structures.for_material(req.pool, loaded.record["surface"],
+                                                                           loaded.record["uniform_film"])))
                 selection = select_with_progress(loaded.target, req, stop)
                 result = selection.result
             else:

@@ -173,7 +173,7 @@ def load_principled_target(source: Source, renders, guard, *, verbose: bool = Fa
     tempdirs.enter_process_tempdir()  # before bpy: Blender's session folder goes in it too
     guard.add_cleanup(tempdirs.remove_process_tempdir)
     from ..blender.lookdev import hdri_path  # imports bpy: after enter_process_tempdir, for Blender's session folder
-    from ..blender.principled_target import principled_views, surface_of  # imports bpy, as above
+    from ..blender.principled_target import principled_views, surface_of, uniform_film  # imports bpy, as above
 
     hdris = [hdri_path(name) for name in hdri_names]  # a name Blender does not ship: refused before rendering
     guard.arm()
@@ -187,14 +187,15 @@ def load_principled_target(source: Source, renders, guard, *, verbose: bool = Fa
     guard.arm()  # Blender may have replaced the handlers
     import bpy
 
-    surface = surface_of(bpy.data.materials[source.name])  # the file is still open
+    material = bpy.data.materials[source.name]  # the file is still open
+    surface, uniform = surface_of(material), uniform_film(material)
     try:
-        target = SphereTarget(views)
+        target = SphereTarget(views, uniform_film=uniform)
     except FitTargetError as e:
         raise ParameterError("material", source.name, f"a material that reflects light on the reference "
                              f"sphere ({e})") from None
     record = {"kind": "principled", "blend": blend, "material": source.name, "size": size, "samples": samples,
               "suns": [list(v.sun.direction) for v in views if v.sun is not None],
               "hdris": [v.environment.name for v in views if v.environment is not None],
-              "surface": surface, "pixels": int(len(target.observed))}
+              "surface": surface, "uniform_film": uniform, "pixels": int(len(target.observed))}
     return LoadedTarget(target, record)

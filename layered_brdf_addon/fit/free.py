@@ -52,6 +52,19 @@ def film_vary(start: LayeredParams) -> tuple[str, ...]:
     return tuple(names)
 
 
+def vary_for(target, start: LayeredParams, vary: Sequence[str] | None = None) -> tuple[str, ...]:
+    """The parameters a fit of ``start`` to ``target`` varies: ``vary`` (checked), else what the
+    target shows (a mirror reflectance, ``film_only``: :func:`film_vary`; else :func:`default_vary`);
+    never ``d_max`` for a film of one thickness (``uniform_film``: it is tied to ``d_min``)."""
+    names = check_vary((film_vary if getattr(target, "film_only", False) else default_vary)(start)
+                       if vary is None else vary)
+    if getattr(target, "uniform_film", False) and "d_max" in names:
+        if "d_min" not in names:
+            raise ParameterError("vary", "d_max", "d_min for a film of one thickness (its d_max follows d_min)")
+        names = tuple(n for n in names if n != "d_max")
+    return names
+
+
 def check_vary(names: Sequence[str]) -> tuple[str, ...]:
     """Distinct names of continuous parameters; else :class:`ParameterError` naming ``vary``."""
     out = []
@@ -81,6 +94,7 @@ class FreeParameters:
 
     names: tuple[str, ...]
     base: LayeredParams
+    uniform: bool = False  # a film of one thickness: d_max follows d_min
 
     def _log(self, name: str) -> bool:
         return name in LOG_SCALED
@@ -112,10 +126,13 @@ class FreeParameters:
 
     def params(self, x: Sequence[float]) -> LayeredParams:
         """The parameters at ``x`` (the base's others); a thickness range given upside down is
-        put right (``d_min`` and ``d_max`` are free alike).  A value on a bound of the log scale is
-        kept inside the range (``exp(log(hi))`` may exceed ``hi`` by a rounding)."""
+        put right (``d_min`` and ``d_max`` are free alike), a uniform film's ``d_max`` is its ``d_min``.
+        A value on a bound of the log scale is kept inside the range (``exp(log(hi))`` may exceed ``hi``
+        by a rounding)."""
         values = {n: (min(max(math.exp(v), search_range(n)[0]), search_range(n)[1]) if self._log(n) else float(v))
                   for n, v in zip(self.names, x)}
+        if self.uniform:
+            values["d_max"] = values.get("d_min", self.base.d_min)
         lo = values.get("d_min", self.base.d_min)
         hi = values.get("d_max", self.base.d_max)
         if lo > hi:

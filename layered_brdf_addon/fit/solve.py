@@ -23,7 +23,7 @@ import numpy as np
 
 from ..model.params import LayeredParams
 from . import colour_space
-from .free import FreeParameters, check_vary, default_vary, film_vary, search_range
+from .free import FreeParameters, vary_for
 from .least_squares import least_squares
 
 THICKNESS_SCAN_NM = (20.0, 3000.0)
@@ -187,8 +187,8 @@ def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
     but refracts, and so tilts its colours, otherwise)."""
     lo, hi = start.d_min, start.d_max
     mids = np.geomspace(*THICKNESS_SCAN_NM, THICKNESS_SCAN_STEPS)
-    if getattr(objective.target, "uniform_film", False):
-        candidates = [start.replace(d_min=m) for m in mids]
+    if objective.free.uniform:
+        candidates = [start.replace(d_min=m, d_max=m) for m in mids]
     else:
         half = min(max((hi - lo) / max(hi + lo, 1e-9), 0.0), 0.9)
         halves = sorted({round(half, 3), *SCAN_HALF_WIDTHS})
@@ -211,9 +211,11 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
         index_scan: bool = True) -> FitResult:
     """Parameters of ``start``'s modes whose closure form best matches ``target``.
 
-    ``vary``: the free parameters (default :func:`~.free.default_vary`); the others keep
-    ``start``'s values.  ``starts``: how many of the thickness scan's best orders are tried
-    besides ``start`` (when the thickness is free), unless one already matches within
+    ``vary``: the free parameters (default: what the target shows, :func:`~.free.vary_for`); the
+    others keep ``start``'s values.  A target of one thickness (``uniform_film``) is fitted by a film
+    of one thickness, from the middle of ``start``'s range.  ``starts``: how many of the thickness
+    scan's best orders are tried besides ``start`` (when the thickness is free), unless one already
+    matches within
     :data:`GOOD_ENOUGH` (0: ``start`` alone, no scan; the scan itself is run only once ``start``'s
     own fit falls short); ``steps_per_start``: the optimiser's steps from each (each step evaluates
     the model once per free parameter for the slopes, and once more);
@@ -223,15 +225,16 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     :class:`FitCancelled`.
     """
     t0 = time.perf_counter()
-    uniform = getattr(target, "uniform_film", False)
-    if uniform:
-        start = start.replace(d_max=search_range("d_max")[1])
-    names = check_vary((film_vary if uniform else default_vary)(start) if vary is None else vary)
+    uniform = getattr(target, "uniform_film", False)  # a film of one thickness: d_max is d_min
+    if uniform:  # from the middle of the start's range
+        middle = 0.5 * (start.d_min + start.d_max)
+        start = start.replace(d_min=middle, d_max=middle)
+    names = vary_for(target, start, vary)
     if start.layer_index == "ior" and {"r1_r", "r1_g", "r1_b"} & set(names):
         # The three indices are free: the fit gives them, not an IOR and a Dispersion (which
         # bind them to a Cauchy law); they start at the IOR and Dispersion's.
         start = start.replace(layer_index="channels")
-    free = FreeParameters(names, start)
+    free = FreeParameters(names, start, uniform)
     objective = _Objective(target, free, progress, should_stop)
     lo, hi = free.bounds()
     thickness_free = {"d_min", "d_max"} & set(names)
@@ -256,6 +259,4 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
         if de <= GOOD_ENOUGH:
             break
     de = objective.mean_delta_e(best)
-    if uniform:
-        best = best.replace(d_max=best.d_min)
     return FitResult(best, de, objective.evaluations, time.perf_counter() - t0, names, tried)

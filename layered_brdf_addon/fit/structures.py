@@ -183,17 +183,30 @@ def for_surface(pool: Sequence[Candidate], kind: str | None) -> list[Candidate]:
     return kept or list(pool)
 
 
+def for_material(pool: Sequence[Candidate], surface: str | None, uniform_film: bool = False) -> list[Candidate]:
+    """The candidates of ``pool`` a Principled material's own evidence allows: its ``surface``'s base
+    (:func:`for_surface`) and, for a film of one thickness, a parallel lower boundary (a tilted one, or
+    one that follows the thickness's slope, needs a film whose thickness varies: on a sphere it would
+    make colours of the sphere's height that the material does not have on another shape).  Each
+    rule the whole pool where it would leave none (the user pinned another mode)."""
+    kept = for_surface(pool, surface)
+    if uniform_film:
+        kept = [c for c in kept if c.start.normal_mode == "parallel"] or kept
+    return kept
+
+
 def structure_pool(reflectance: bool = False, pinned: Mapping[str, str] | None = None,
-                   surface: str | None = None) -> list[Candidate]:
+                   surface: str | None = None, uniform_film: bool = False) -> list[Candidate]:
     """The structures a fit with no start chooses among, as the command line, the panel and the
     benchmarks ask for them: :func:`candidates` with the ``pinned`` modes, the thickness by height
     unless pinned (numpy reproduces a height pixel by pixel); for a ``reflectance`` table a smooth,
     uniform film (its lower boundary parallel unless pinned); for a Principled material the
-    structures of its ``surface`` (:func:`for_surface`)."""
+    structures of its ``surface`` and film (:func:`for_material`)."""
     pinned = dict(pinned or {})
     if reflectance:
         pinned.setdefault("normal_mode", "parallel")
-    return for_surface(candidates(pinned, thickness_mode=pinned.pop("thickness_mode", "height")), surface)
+    return for_material(candidates(pinned, thickness_mode=pinned.pop("thickness_mode", "height")), surface,
+                        uniform_film)
 
 
 def _metal(p: LayeredParams) -> bool:
@@ -205,7 +218,7 @@ def _metal(p: LayeredParams) -> bool:
 def sample_target(target, pixels: int = SCREEN_PIXELS):
     """A sample of ``pixels`` of ``target``'s pixels (a sphere target), else the target."""
     if isinstance(target, SphereTarget) and target.pixels > pixels:
-        return SphereTarget(target.views, pixels=pixels)
+        return SphereTarget(target.views, pixels=pixels, uniform_film=target.uniform_film)
     return target
 
 

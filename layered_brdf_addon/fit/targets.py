@@ -94,6 +94,7 @@ class SphereTarget:
 
     views: Sequence[SphereView]
     pixels: int = 1500
+    uniform_film: bool = False  # the target is a film of one thickness: the fit's d_max follows its d_min
     _points: list = field(default_factory=list, repr=False)
     _group_of: np.ndarray | None = field(default=None, repr=False)
 
@@ -409,6 +410,7 @@ class ReflectanceTarget:
     angles: np.ndarray  # (A,) degrees
     rgb: np.ndarray  # (A, 3) linear Rec.709 reflectance
     uniform_film = True  # one thickness, d_min: the fit ties d_max to it
+    film_only = True  # a mirror reflectance shows the film alone (:func:`.free.film_vary`)
 
     def __post_init__(self):
         self.angles = np.asarray(self.angles, dtype=float)
