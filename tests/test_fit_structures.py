@@ -115,6 +115,34 @@ def test_a_finalist_is_fitted_again_on_every_pixel_only_where_another_order_beat
     assert not structures.other_order(soap, soap.replace(d_min=170.0))  # 713 nm
 
 
+def test_a_finalist_screened_into_another_order_tries_its_preset_s_own_order_on_the_sample(monkeypatch):
+    """The screening may carry a structure away from its preset's own thickness order (a soap film from
+    soap_bubble's 525 nm to 985 nm); the second round fits the preset's own values on the sample too, and the
+    whole target again from them where they beat the finalist's first fit there."""
+    calls, sampled = [], []
+
+    def fit(target, start, vary=None, *, starts=3, steps_per_start=40, try_start=True, **how):
+        if target is screen:  # screening: each candidate carried 800 nm thicker
+            return structures.solve.FitResult(start.replace(d_min=start.d_min + 800, d_max=start.d_max + 800),
+                                              1.0, 10, 0.0, ())
+        if target is sample:
+            sampled.append((start.d_min, starts, steps_per_start))
+            own_order = starts == 0  # the preset's values: 1.0 on the sample, the scan's orders 3.0
+            return structures.solve.FitResult(start, 1.0 if own_order else 3.0, 10, 0.0, ())
+        calls.append((start.d_min, starts))
+        return structures.solve.FitResult(start, 2.0, 10, 0.0, ())
+
+    whole, screen, sample = object(), object(), object()
+    monkeypatch.setattr(structures, "sample_target", lambda target, pixels: {
+        structures.SCREEN_PIXELS: screen, structures.REFINE_PIXELS: sample}[pixels])
+    monkeypatch.setattr(structures.solve, "fit", fit)
+    monkeypatch.setattr(structures.solve, "sample_delta_e", lambda target, params: 2.0)
+    soap = preset("soap_bubble")
+    select_and_fit(whole, [Candidate("c0", soap)])
+    assert sampled == [(soap.d_min + 800, 3, structures.REFINE_STEPS), (soap.d_min, 0, structures.REFINE_STEPS)]
+    assert calls == [(soap.d_min + 800, 0), (soap.d_min, 0)]  # the first fit, then from the preset's own order
+
+
 def test_a_target_with_nothing_to_sample_fits_every_order_in_full(monkeypatch):
     """A reflectance table (a few colours, cheap to evaluate) is not sampled: the second round fits each
     finalist's other orders on the whole target with every step (12 steps from the scan's orders missed

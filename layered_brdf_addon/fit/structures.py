@@ -23,7 +23,8 @@ explain the target and keeps the best:
    :data:`FINALIST_MARGIN` of the best's screening figure), on every sampled pixel, in two rounds:
    each from its screened start (the scan's best order on the sample), then, only where none came
    within the fit's :data:`~.solve.GOOD_ENOUGH`, each through the full scan's other orders (layer
-   indices scanned too), fitted on a larger sample (:data:`REFINE_PIXELS`, :data:`REFINE_STEPS`
+   indices scanned too) and, where the screening carried it out of its preset's own order, from the
+   preset's own values, fitted on a larger sample (:data:`REFINE_PIXELS`, :data:`REFINE_STEPS`
    steps from each), and on every sampled pixel again only where the best of them lies in another
    interference order (:func:`other_order`) and beats the finalist's own fit on that sample: a
    finalist that finds its first order again costs a sample's scan, not a full fit.  A target with
@@ -264,6 +265,7 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
     total = 0
     small = sample_target(target, SCREEN_PIXELS)
     pool = [replace(c) for c in pool]
+    own = {id(c): c.start for c in pool}  # each structure's preset values, before screening moves them
 
     def hearing(stage: str):
         base = total
@@ -307,6 +309,11 @@ def select_and_fit(target, pool: Sequence[Candidate], vary: Sequence[str] | None
             orders = solve.fit(middle, c.start, vary, starts=starts, steps_per_start=REFINE_STEPS,
                                progress=hearing(stage), should_stop=should_stop, try_start=False)
             total += orders.evaluations
+            if other_order(own[id(c)], c.start):  # the screening left the preset's own order
+                preset_order = solve.fit(middle, own[id(c)], vary, starts=0, steps_per_start=REFINE_STEPS,
+                                         progress=hearing(stage), should_stop=should_stop)
+                total += preset_order.evaluations
+                orders = min((orders, preset_order), key=lambda r: r.mean_delta_e)
             if other_order(orders.params, c.result.params) and \
                     orders.mean_delta_e < solve.sample_delta_e(middle, c.result.params):
                 full_fit(c, stage, orders.params, starts=0)
