@@ -118,11 +118,12 @@ def surface_of(material) -> str | None:
 def start_for(params: LayeredParams, material) -> LayeredParams:
     """The start of a fit to ``material``: a film of one thickness is fitted pixel by pixel,
     so a noise pattern's start becomes a thickness by height (and the fit, told the film is
-    uniform, ties its range to one thickness: :attr:`..fit.targets.SphereTarget.uniform_film`).  A noise start would be matched through its colour
-    statistics instead, at six times the cost per evaluation, for the same result (measured on
-    a 200 nm titanium film from ``anodised_titanium``: 465 s against 149 s by height on a busy
-    two-core machine; rendered, both within 0.7 mean CIEDE2000 of the target).  A film driven
-    by a texture keeps the start's pattern."""
+    uniform, ties its range to one thickness: :attr:`..fit.targets.SphereTarget.uniform_film`).
+    A noise start would be matched through its colour statistics instead, at six times the cost
+    per evaluation, for the same result (measured on a 200 nm titanium film from
+    ``anodised_titanium``: 465 s against 149 s by height on a busy two-core machine; rendered,
+    both within 0.7 mean CIEDE2000 of the target).  A film driven by a texture keeps the start's
+    pattern."""
     if params.thickness_mode == "noise" and uniform_film(material):
         return params.replace(thickness_mode="height")
     return params

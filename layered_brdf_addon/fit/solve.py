@@ -215,9 +215,8 @@ def fit(target, start: LayeredParams, vary: Sequence[str] | None = None, *, star
     others keep ``start``'s values.  A target of one thickness (``uniform_film``) is fitted by a film
     of one thickness, from the middle of ``start``'s range.  ``starts``: how many of the thickness
     scan's best orders are tried besides ``start`` (when the thickness is free), unless one already
-    matches within
-    :data:`GOOD_ENOUGH` (0: ``start`` alone, no scan; the scan itself is run only once ``start``'s
-    own fit falls short); ``steps_per_start``: the optimiser's steps from each (each step evaluates
+    matches within :data:`GOOD_ENOUGH` (0: ``start`` alone, no scan; the scan itself is run only
+    once ``start``'s own fit falls short); ``steps_per_start``: the optimiser's steps from each (each step evaluates
     the model once per free parameter for the slopes, and once more);
     ``try_start=False``: the scan's orders only, not ``start``'s own thickness; ``index_scan=False``:
     the scan keeps the start's layer indices (:func:`thickness_starts`).  ``progress(evaluations)``
