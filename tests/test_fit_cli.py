@@ -465,17 +465,13 @@ def test_a_principled_material_is_fitted(tmp_path, principled_blend, material, o
     assert files_under(tmp_path / "out") == ["m.json", "m.png"]
     record = json.loads((tmp_path / "out" / "m.json").read_text())["fit"]
     assert record["target"]["kind"] == "principled" and len(record["target"]["suns"]) == 3
-    assert record["target"]["hdris"] == ["forest.exr"]
-    assert record["target"]["material"] == material
+    assert record["target"]["hdris"] == ["forest.exr"] and record["target"]["material"] == material
     assert record["target"]["surface"] == {"TitaniumFilm": "metal", "PearlFilm": "dielectric"}[material]
-    assert record["target"]["uniform_film"] is True  # a film of one thickness, fitted as one
-    film = fitted_params(tmp_path / "out" / "m.json")
-    assert film.d_min == film.d_max
-    if not options:
-        assert {s["modes"]["normal_mode"] for s in record["structures"]} == {"parallel"}
+    film = fitted_params(tmp_path / "out" / "m.json")  # a film of one thickness, fitted as one
+    assert record["target"]["uniform_film"] is True and film.d_min == film.d_max
     if not options:  # no start: only the structures of the material's own surface (a diffuse base) were tried,
-        # with a parallel lower boundary (the film has one thickness)
-        assert record["structures"] and {s["modes"]["base_layer"] for s in record["structures"]} == {"none"}
+        modes = [s["modes"] for s in record["structures"]]  # with a parallel lower boundary (one thickness)
+        assert modes and {(m["base_layer"], m["normal_mode"]) for m in modes} == {("none", "parallel")}
     assert record["mean_delta_e_2000"] <= PRINCIPLED_DELTA_E
     if "--verify" in options:
         fitted, rendered = record["mean_delta_e_2000"], record["verify"]["mean_delta_e_2000"]
