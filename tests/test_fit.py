@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.free import FreeParameters, check_vary, default_vary, film_vary, vary_for
 from layered_brdf_addon.fit.solve import FitCancelled, fit
-from layered_brdf_addon.fit import colour_space
 from layered_brdf_addon.fit.targets import (DARKEST_WHITE, ReflectanceTarget, SphereTarget, SphereView, TargetError,
                                               noise_levels)
 from layered_brdf_addon.model.params import ParameterError
@@ -47,15 +47,14 @@ def test_each_view_is_measured_on_its_own_white():
     truth = preset("oil_slick").replace(thickness_mode="height")
     other = truth.replace(d_min=150, d_max=900)
     [a, b] = views_of(truth, SUNS)
-    bright = SphereView(a.image * 8.0, a.camera, a.sun)
-    for pair in ([a, b], [bright, b]):
-        target = SphereTarget(pair)
+
+    def per_view(exposure: float) -> list[np.ndarray]:
+        """Each view's CIEDE2000 between the target and ``other``, the first view ``exposure`` times brighter."""
+        target = SphereTarget([SphereView(a.image * exposure, a.camera, a.sun), b])
         assert target.view_whites[0] == pytest.approx(colour_space.white_of(target._points[0]["observed"]))
-        fitted = [target.render(other, k) * (8.0 if pair[0] is bright and k == 0 else 1.0) for k in range(2)]
-        per_view = target.images_delta_e(fitted)
-        if pair[0] is a:
-            before = per_view
-    for now, then in zip(per_view, before):
+        return target.images_delta_e([target.render(other, 0) * exposure, target.render(other, 1)])
+
+    for now, then in zip(per_view(8.0), per_view(1.0)):
         assert now == pytest.approx(then, rel=1e-9, abs=1e-12)
         assert then.max() > 5.0  # two different films, where the sun lights them
 
