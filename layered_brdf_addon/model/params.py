@@ -21,6 +21,7 @@ from .errors import ParameterError
 from .media import MEDIA, lower_medium_values, media_names
 from .dispersion import WAVELENGTHS_NM, abbe_indices  # the channels' wavelengths (SPEC)
 from .socket_units import ROUGHNESS, UNITS, socket_range, socket_units_of, to_socket
+from .stack import FilmStack, stack_or_none
 
 
 
@@ -30,7 +31,7 @@ class ParamSpec:
 
     name: str
     label: str
-    kind: str  # "float", "enum" or "bool"
+    kind: str  # "float", "enum", "bool" or "stack" (a :class:`~.stack.FilmStack`, or None)
     default: Any
     description: str
     unit: str = ""
@@ -56,6 +57,9 @@ class ParamSpec:
             return "one of " + ", ".join(repr(o) for o in self.options)
         if self.kind == "bool":
             return "true or false"
+        if self.kind == "stack":
+            return "a film stack ({'kind': 'periodic' or 'list', 'films': [...], 'periods': ..., 'disorder': ...}, " \
+                "docs/stacks.md) or none"
         unit = f" {self.unit}" if self.unit else ""
         return f"a number in [{_fmt(self.min)}, {_fmt(self.max)}]{unit}"
 
@@ -69,6 +73,8 @@ class ParamSpec:
             if not isinstance(value, bool):
                 raise ParameterError(self.name, value, self.allowed)
             return value
+        if self.kind == "stack":
+            return stack_or_none(value, self.name)
         if isinstance(value, bool):
             raise ParameterError(self.name, value, self.allowed)
         try:
@@ -96,8 +102,8 @@ def _fmt(x: float) -> str:
 
 def _p(default, label, description, *, unit="", range=(-math.inf, math.inf), soft=None,
        options=(), socket=True, group="Layer", socket_label="", subtype="NONE", component=None, added="",
-       socket_units="", socket_description="", legacy_labels=(), used_with=()):
-    kind = "enum" if options else ("bool" if isinstance(default, bool) else "float")
+       socket_units="", socket_description="", legacy_labels=(), used_with=(), kind=None):
+    kind = kind or ("enum" if options else ("bool" if isinstance(default, bool) else "float"))
     assert socket_units in UNITS and (subtype == "ANGLE") <= (unit == "deg")
     meta = dict(label=label, description=description, unit=unit, min=range[0], max=range[1],
                 soft_min=None if soft is None else soft[0], soft_max=None if soft is None else soft[1],
@@ -312,6 +318,14 @@ class LayeredParams:
     lobe: str = _p("beckmann", "Lobe",
                    "Closure used for the specular lobes: 'beckmann' (both backends) or 'phong' (OSL only)",
                    options=LOBES, group="Accuracy")
+    # --- a stack of films (structural colour) ----------------------------
+    stack: FilmStack | None = _p(None, "Film stack",
+                                 "The layer as a stack of films (a Bragg mirror, a beetle's cuticle, nacre, a "
+                                 "coating) over the lower medium, with thin-film optics: a period of films repeated, "
+                                 "or a list of films, each a named medium or an IOR, with its thickness in nm; the "
+                                 "layer's thickness (Thickness Min / Max, its pattern or its input) is the stack's "
+                                 "total and scales every film alike. None: one film of the layer's index",
+                                 kind="stack", group="Stack")
 
     # ------------------------------------------------------------------
     @classmethod
@@ -334,7 +348,19 @@ class LayeredParams:
                 object.__setattr__(self, name, min(max(n, _SPEC_BY_NAME[name].min), _SPEC_BY_NAME[name].max))
         if self.d_min > self.d_max:
             raise ParameterError("d_min", self.d_min, f"at most d_max = {self.d_max:g} nm")
+        if self.stack is not None:
+            self._check_stack()
         return self
+
+    def _check_stack(self) -> None:
+        """What a film stack needs of the other settings: thin-film optics, Beckmann lobes (its tables are
+        read by both backends) and a lower boundary parallel to the top (the films' boundaries are)."""
+        needs = (("optics", "physical", "thin-film optics: a stack's films have their own indices"),
+                 ("lobe", "beckmann", "the lobe its baked tables are read with"),
+                 ("normal_mode", "parallel", "the films' boundaries lie parallel to the top"))
+        for name, wanted, why in needs:
+            if getattr(self, name) != wanted:
+                raise ParameterError(name, getattr(self, name), f"'{wanted}' with a film stack ({why})")
 
     def check_used(self, given) -> None:
         """ParameterError naming the first of ``given`` (values a user gave, by name) that this material does not
@@ -365,7 +391,10 @@ class LayeredParams:
         return (self.base_r, self.base_g, self.base_b)
 
     def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """Every value by name, as JSON holds it (a stack as :meth:`.stack.FilmStack.to_dict`)."""
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        out["stack"] = None if self.stack is None else self.stack.to_dict()
+        return out
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], *, base: "LayeredParams | None" = None) -> "LayeredParams":
@@ -374,7 +403,7 @@ class LayeredParams:
         if unknown:
             name = sorted(unknown)[0]
             raise ParameterError(name, data[name], "a known parameter name: " + ", ".join(_SPEC_BY_NAME))
-        values = dataclasses.asdict(base) if base is not None else {}
+        values = base.to_dict() if base is not None else {}
         values.update(data)
         medium = data.get("lower_medium")
         if medium in LOWER_MEDIA and medium != "custom":

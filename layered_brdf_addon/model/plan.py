@@ -25,6 +25,7 @@ class EffectPlan:
     passes: bool = True  # physical: the lower medium may pass light to the Base Shader (False: it absorbs, a metal)
     index: str = "channels"  # the layer's index: "channels" (three sockets) or "ior" (IOR and Dispersion)
     tables: bool = False  # the closures read from the material's baked tables (.shading.tables), not computed
+    stack: bool = False  # the layer is a stack of films (.stack): one lobe of the stack's reflectance, from tables
 
     @classmethod
     def full(cls, lobe: str = "beckmann", thickness: str = "noise", normals: str = "correlated",
@@ -50,12 +51,14 @@ class EffectPlan:
             parts.append("Ab")
         if self.tables:
             parts.append("Tb")
+        if self.stack:
+            parts.append("M")
         return "".join(parts)
 
     @property
     def title(self) -> str:
         """What the plan simulates, for people: "Physical film, analytic colour, noise thickness"."""
-        optics = "Physical film" if self.optics == "physical" else "Paper film"
+        optics = "Film stack" if self.stack else "Physical film" if self.optics == "physical" else "Paper film"
         colour = (f"{self.spectral} wavelengths" if self.spectral else
                   "analytic colour" if self.analytic else "RGB colour")
         thickness = {"noise": "noise thickness", "height": "height thickness", "input": "thickness from a link",
@@ -91,13 +94,16 @@ class EffectPlan:
                        + (", and over the pixel's footprint in OSL" if self.footprint else ""))
         if not self.interference:
             out.append("no interference: the layer is thick enough for it to average out over the band")
-        if self.optics == "physical":
+        if self.stack:
+            out.append("a stack of films: its reflectance (every film, both polarisations) in one lobe, what it "
+                       "passes to the base")
+        elif self.optics == "physical":
             out.append("thin-film optics: exact Fresnel at both boundaries, reflection phases"
                        + (", and the beams that bounce inside the layer (more harmonics)" if self.multibeam else "")
                        + ("" if self.passes else "; an absorbing lower medium: nothing reaches the Base Shader"))
         if self.index == "ior":
             out.append("the layer's indices from its IOR and Dispersion (Abbe number)")
-        if self.specular:
+        if self.specular and not self.stack:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")
         if self.tables:

@@ -121,6 +121,8 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     banded = bool(spectral) or analytic  # colour integrated over the band, where interference can average out
     # A linked thickness is not Thickness Min's: interference stays.
     interference = not (banded and not moving("interference") and not linked and interference_averages_out(p))
+    if p.stack is not None:
+        return _stack_plan(p, moving, thickness, spectral, analytic)
     physical = p.optics == "physical"
     multibeam = physical and interference and (moving("multibeam") or beam_contrast(p) > MULTIBEAM_CONTRAST)
     passes = not physical or moving("passes") or min(p.k2) < CLEAR_K
@@ -135,12 +137,23 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     return replace(plan, tables=True)
 
 
+def _stack_plan(p: LayeredParams, moving, thickness: str, spectral: int, analytic: bool) -> EffectPlan:
+    """A film stack's plan: one lobe of the stack's reflectance, always read from tables baked for the
+    material's values (the stack has no per-point shader: its films are many), a linked thickness read
+    within Thickness Min and Max."""
+    passes = moving("passes") or min(p.k2) < CLEAR_K
+    return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
+                      thickness=thickness, normals="parallel", dispersion=False, lobe=p.lobe, spectral=spectral,
+                      interference=True, analytic=analytic, optics="physical", multibeam=False, passes=passes,
+                      index=p.layer_index, tables=True, stack=True)
+
+
 def render_plan(p: LayeredParams, animated: Iterable[str] = (), backend: str = "nodes") -> EffectPlan:
     """The plan a material is built with: :func:`plan_effects`, computed per point where its baked tables would
     not hold the program (:mod:`.table_check`: total internal reflection in the layer, fringes finer than the
     tables resolve).  Baking checks itself once per set of values (kept for the bake that follows)."""
     plan = plan_effects(p, animated, backend)
-    if plan.tables and not checked_bake(p, plan)[2].holds:
+    if plan.tables and not plan.stack and not checked_bake(p, plan)[2].holds:
         return replace(plan, tables=False)
     return plan
 
@@ -149,7 +162,7 @@ def tables_fallback(p: LayeredParams, animated: Iterable[str] = (), backend: str
     """Why a material that asks for baked tables computes per point because they would not hold the program
     (empty where it uses them, or its plan has none for another reason)."""
     plan = plan_effects(p, animated, backend)
-    return checked_bake(p, plan)[2].why() if plan.tables else ""
+    return checked_bake(p, plan)[2].why() if plan.tables and not plan.stack else ""
 
 
 def beam_contrast(p: LayeredParams) -> float:

@@ -51,6 +51,7 @@ from .shading.lobes import (ANISO_FLOOR, INV_2PI, MIN_COS, angle2, beckmann_lamb
                             glossy_alphas, lobe_alphas, lobe_peak, lobe_shape)
 from .shading.placement import exit_direction, interference_centre, layer_path, lobe_geometry
 from .shading.spectral_mode import merged_group_weights, shade_spectral, spectral_groups, spectral_step
+from .shading.stack_shade import stack_shade
 from .shading.step import shader_function
 from .shading.tables import TableLayout, tabulated_shade
 from .shading.surface_prelude import (DEG, D_LIMIT, GRADIENT_STEP, correlated_normal, layer_thickness, lower_normal,
@@ -156,11 +157,12 @@ def surface_geometry(ops, plan: EffectPlan, *, thickness=None, lower=None, axis=
 
 
 def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None, *, thickness=None, lower=None,
-                    axis=None) -> ShadingResult:
+                    axis=None, stack=None) -> ShadingResult:
     """The whole shader at one shading point, from the material's inputs; a plan with ``tables``
     reads the closures from the material's baked tables, of ``layout`` (:mod:`.shading.tables`).
     ``thickness``, ``lower`` (the lower normal), ``axis``: what a caller brings of its own
-    (:func:`surface_geometry`).
+    (:func:`surface_geometry`).  A film stack's plan computes its closures on numpy only, from ``stack``
+    (:class:`.stack_optics.StackResponse`); the shaders read them from tables.
 
     ``extras`` carries the shader's other outputs: ``thickness`` (nm), ``lower_normal``,
     ``upper_normal`` (world space), ``base_weight`` (the factor of the Base Shader input) and
@@ -171,6 +173,12 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None, *,
         with ops.stage("Lobes and interference from the material's baked tables: the view's angle, d "
                        "(and the view's azimuth from the lower normal)"):
             res = tabulated_shade(ops, plan, layout, P, n0, v, d, axis)
+    elif plan.stack:
+        if stack is None:
+            raise ValueError(f"plan {plan.key}: a film stack's closures are computed from its optics on numpy "
+                             "(stack=StackResponse); the shaders read them from its tables")
+        with ops.stage("A stack of films: its reflectance in one lobe, what it passes to the base"):
+            res = stack_shade(ops, plan, P, n0, v, d, stack)
     else:
         with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
             inputs = program_inputs(P)

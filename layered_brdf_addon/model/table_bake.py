@@ -14,9 +14,11 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import ops_numpy
+from . import ops_numpy, stack_tables
+from .table_grid import (MAX_TABLE_BYTES, MAX_THICKNESS_SAMPLES, MIN_THICKNESS_SAMPLES, SAMPLES_PER_FRINGE,
+                         SAMPLES_PER_HARMONIC_FRINGE, SHORTEST_NM, held_values, texel_grid as _grid)
 from .ops_numpy import ShadingPoint
-from .params import WAVELENGTHS_NM, LayeredParams, iter_sockets, socket_values
+from .params import WAVELENGTHS_NM, LayeredParams
 from .plan import EffectPlan
 from .program import shade, tabulated_shade
 from .shading.base_shader import base_receives_light, passed_to_base
@@ -25,15 +27,6 @@ from .shading.surface_prelude import tilted_normal
 from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT,
                              NotTabulable, TableLayout, tabulable, unread_by_tables)
 from .shading.thin_film import harmonic_count
-
-SAMPLES_PER_FRINGE = 24  # texels along d per interference fringe of the bluest channel (measured: docs/tables.md)
-SAMPLES_PER_HARMONIC_FRINGE = 10  # and per fringe of the highest harmonic of the beams that bounce in the layer
-# (m fringes per fringe of the first; their amplitudes fall as |r01 r12|^m)
-MIN_THICKNESS_SAMPLES = 8
-MAX_TABLE_BYTES = 1 << 20  # a material's tables, at most (float32 RGBA texels)
-MAX_THICKNESS_SAMPLES = 1024
-SHORTEST_NM = 400.0  # the bluest wavelength a plan evaluates (spectral modes reach below the RGB channels' 465 nm)
-
 
 def _fringe_samples(params: LayeredParams, plan: EffectPlan) -> int:
     """Texels along the thickness that its interference needs: :data:`SAMPLES_PER_FRINGE` per fringe (a
@@ -55,30 +48,6 @@ def thickness_samples(params: LayeredParams, plan: EffectPlan, row: TableLayout)
         return 1
     most = min(MAX_TABLE_BYTES // (row.images * row.image_width * 16), MAX_THICKNESS_SAMPLES)
     return int(min(_fringe_samples(params, plan), most))
-
-
-def _grid(width: int, height: int, d_min, d_max, azimuths: int = 1):
-    """View directions, thicknesses and lower normals' azimuths (from the view's plane: the view's azimuth
-    from the lower normal, turned over) of the texels, (A, H, W): n0 = +z, the view in the xz plane towards
-    +x, at ``sqrt(cos_v) = i / (W - 1)`` (with azimuths, at the angle ``pi/2 (1 - i / (W - 1))``)."""
-    c = np.cos((1.0 - np.linspace(0.0, 1.0, width)) * (0.5 * math.pi)) if azimuths > 1 else \
-        np.linspace(0.0, 1.0, width) ** 2
-    t = np.linspace(0.0, 1.0, height) if height > 1 else np.zeros(1)
-    a = np.linspace(0.0, math.pi, azimuths) if azimuths > 1 else np.zeros(1)
-    A, T, C = np.meshgrid(a, t, c, indexing="ij")
-    v = np.stack([np.sqrt(np.maximum(1.0 - C * C, 0.0)), np.zeros_like(C), C], axis=-1)
-    return v, d_min + (d_max - d_min) * T, A
-
-
-def held_values(params: LayeredParams, backend: str, plan: EffectPlan | None = None) -> dict:
-    """The shader's input values as the sockets of ``backend`` hold them (float32): what the shader reads,
-    and what reading a material's sockets back gives again.  With ``plan``, only those it reads: a layer
-    given by its IOR and Dispersion does not read the three indices (derived from them, they may differ in
-    their last bit once read back), one given by its three indices not the IOR and Dispersion."""
-    values = socket_values({spec.name: getattr(params, spec.name) for spec in iter_sockets()}, backend)
-    unread = () if plan is None else ("layer_ior", "layer_dispersion") if plan.index == "channels" else \
-        ("r1_r", "r1_g", "r1_b")
-    return {k: float(np.float32(v)) for k, v in values.items() if k not in unread}
 
 
 def _arithmetic(plan: EffectPlan) -> EffectPlan:
@@ -138,6 +107,8 @@ def _off_normal(normal) -> float:
 def table_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
     """The layout of ``params``'s tables for ``plan`` (NotTabulable where the plan's closures depend on more,
     or a tilted boundary's slices would need more than :data:`MAX_TABLE_BYTES`)."""
+    if plan.stack:
+        return stack_tables.stack_layout(params, plan)
     if not tabulable(plan):
         raise NotTabulable(f"plan {plan.key}: the closures depend on more than the view and the thickness")
     closures, oriented = _closures(replace(plan, tables=False))
@@ -178,7 +149,10 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
     """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, H, image_width, 4),
     a tilted boundary's azimuth slices side by side, each with its edge columns repeated."""
     layout = table_layout(params, plan)
-    res, (base, transmittance), frame = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
+    if plan.stack:
+        res, (base, transmittance), frame = stack_tables.stack_grid(params, plan, layout)
+    else:
+        res, (base, transmittance), frame = _shade_grid(params, plan, layout.width, layout.height, layout.azimuths)
     shape = (layout.azimuths, layout.height, layout.width)
     out = np.zeros((layout.images, *shape, 4), dtype=np.float32)
 
@@ -275,8 +249,10 @@ def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
     values = {k: v for k, v in held_values(params, "nodes", plan).items() if k not in unread}
     samples = [COS_SAMPLES, SAMPLES_PER_FRINGE] + \
         ([AZIMUTH_SAMPLES, ANGLE_SAMPLES] if plan.normals == "tilted" else [])
-    record = json.dumps({"format": TABLE_FORMAT, "plan": plan.key, "samples": samples,
-                         "values": values}, sort_keys=True)
+    record = {"format": TABLE_FORMAT, "plan": plan.key, "samples": samples, "values": values}
+    if plan.stack:
+        record.update(stack_tables.stack_record(params))
+    record = json.dumps(record, sort_keys=True)
     return hashlib.sha1(record.encode()).hexdigest()[:16]
 
 

@@ -21,6 +21,7 @@ from .params import LayeredParams
 from .plan import EffectPlan
 from .program import layered_surface
 from .shading.surface_prelude import tilted_normal
+from .stack_optics import StackResponse
 from .table_bake import bake, held_values, table_digest, tabulated_result
 
 PROBE_POINTS = 4096
@@ -103,7 +104,9 @@ def check_tables(params: LayeredParams, plan: EffectPlan, layout, texels, points
     if plan.normals != "tilted":
         n1 = n0
     pt = ShadingPoint(held_values(params, ShadingPoint.SOCKETS), n0, v, np.zeros_like(n0))
-    computed = layered_surface(pt, replace(plan, tables=False), thickness=d, lower=vec(n1), axis=vec(axes))
+    stack = StackResponse.of(params) if plan.stack else None
+    computed = layered_surface(pt, replace(plan, tables=False), thickness=d, lower=vec(n1), axis=vec(axes),
+                               stack=stack)
     tabulated = tabulated_result(params, plan, layout, texels, n0, v, d, axes if layout.sliced else None)
     a = evaluate_closures(computed, n0, v, light, plan.lobe)
     b = evaluate_closures(tabulated, n0, v, light, plan.lobe)
@@ -138,14 +141,16 @@ _checked: OrderedDict = OrderedDict()  # table digest -> (layout, texels, check)
 
 
 def checked_bake(params: LayeredParams, plan: EffectPlan):
-    """``(layout, texels, check)``: the bake of ``params`` for ``plan`` and how far it is from the program; the
-    last few are kept (by the tables' digest), so that checking a plan and baking its tables bake once."""
+    """``(layout, texels, check)``: the bake of ``params`` for ``plan`` and how far it is from the program (None
+    for a film stack's, :func:`check_tables` measures it); the last few are kept (by the tables' digest), so that checking a plan and baking its tables bake once."""
     key = f"{plan.key}:{table_digest(params, plan)}"
     if key in _checked:
         _checked.move_to_end(key)
         return _checked[key]
     layout, texels = bake(params, plan)
-    _checked[key] = (layout, texels, check_tables(params, plan, layout, texels))
+    # A stack always reads its tables (it has no per-point shader): its check is the tests' and benchmarks'.
+    check = None if plan.stack else check_tables(params, plan, layout, texels)
+    _checked[key] = (layout, texels, check)
     while len(_checked) > _KEPT:
         _checked.popitem(last=False)
     return _checked[key]

@@ -1,0 +1,77 @@
+"""A film stack's tables: its closures (:func:`.shading.stack_shade.stack_shade`) baked over the view's
+cosine and the layer's thickness, in the layout every material's tables have (:mod:`.shading.tables`), so
+the node group and the OSL shader read a stack of 64 films as they read one film: one image for the
+reflected lobe, one for the diffuse part and the Base Shader's factor, one for the lobe's anisotropy, and
+one for what passes to the base where the plan has a diffuse part.
+
+Rows along the thickness: :data:`.table_grid.SAMPLES_PER_FRINGE` per fringe of the whole stack (the
+finest its reflectance shows as the thickness scales, at the highest index of its films), within
+:data:`.table_grid.MAX_TABLE_BYTES`.  numpy; no bpy.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from . import ops_numpy, table_grid
+from .ops_numpy import ShadingPoint
+from .params import LayeredParams
+from .plan import EffectPlan
+from .shading.inputs import clamped_inputs
+from .shading.stack_shade import stack_shade
+from .shading.tables import COS_SAMPLES, TableLayout
+from .stack_optics import SPECTRUM_NM, NodeResponse, StackResponse, film_index
+
+
+def _place(plan: EffectPlan) -> str:
+    if not plan.passes:
+        return "none"
+    return "own" if plan.diffuse else "shared"
+
+
+def highest_index(params: LayeredParams) -> float:
+    """The highest real index of the stack's films over the visible band."""
+    return max(float(np.max(film_index(f, SPECTRUM_NM).real)) for f in params.stack.films)
+
+
+def stack_rows(params: LayeredParams, plan: EffectPlan, row: TableLayout) -> int:
+    """Texels along the thickness: 1 for a constant one, else :data:`.table_grid.SAMPLES_PER_FRINGE` per
+    fringe of the whole stack (``lambda / (2 n)`` of its total thickness, the shortest wavelength, the highest
+    index) at least :data:`.table_grid.MIN_THICKNESS_SAMPLES`, within the bytes and rows a material's tables
+    may have (``row``: a layout of one row)."""
+    if plan.thickness == "constant":
+        return 1
+    fringes = 2.0 * highest_index(params) * abs(params.d_max - params.d_min) / table_grid.SHORTEST_NM
+    wanted = max(math.ceil(table_grid.SAMPLES_PER_FRINGE * fringes) + 1, table_grid.MIN_THICKNESS_SAMPLES)
+    most = min(table_grid.MAX_TABLE_BYTES // (row.images * row.image_width * 16), table_grid.MAX_THICKNESS_SAMPLES)
+    return int(min(wanted, most))
+
+
+def stack_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
+    """The layout of a stack's tables: the reflected lobe (every channel) where the plan is specular."""
+    closures = (("reflect", (0, 1, 2)),) if plan.specular else ()
+    row = TableLayout(closures, COS_SAMPLES, 1, 1, (), _place(plan))
+    return replace(row, height=stack_rows(params, plan, row))
+
+
+def stack_grid(params: LayeredParams, plan: EffectPlan, layout: TableLayout):
+    """The stack's closures at the texels of ``layout`` (as :func:`.table_bake._shade_grid` gives a film's),
+    what passes to the base, and no frame (the closures lie about ``n0``)."""
+    values = table_grid.held_values(params, ShadingPoint.SOCKETS)
+    n0 = np.zeros((1, layout.height, layout.width, 3))
+    n0[..., 2] = 1.0
+    pt = ShadingPoint(values, n0, n0, np.zeros_like(n0))
+    plan = replace(plan, tables=False)
+    P = clamped_inputs(pt, plan)
+    v, d, _ = table_grid.texel_grid(layout.width, layout.height, float(P["d_min"]), float(P["d_max"]))
+    response = NodeResponse(StackResponse.of(params), d[0, :, 0])
+    res = stack_shade(pt, plan, P, ops_numpy.vec(n0), ops_numpy.vec(v), d, response)
+    return res, (res.extras["base_weight"], res.extras["transmittance"]), None
+
+
+def stack_record(params: LayeredParams) -> dict:
+    """What a stack's tables depend on besides the sockets: the stack, and the lower medium by name (a named
+    one is read at every wavelength, not only at the channels')."""
+    return {"stack": params.stack.to_dict(), "lower_medium": params.lower_medium}
