@@ -85,6 +85,11 @@ class Layout:
         assert prop in data.bl_rna.properties, f"{data!r} has no property {prop}"
         self.log.append(("prop", data, prop, text))
 
+    def template_list(self, list_type, list_id, data, prop, active_data, active_prop, **_):
+        assert getattr(bpy.types, list_type, None) is not None, f"list {list_type} is not registered"
+        assert prop in data.bl_rna.properties and active_prop in active_data.bl_rna.properties
+        self.log.append(("list", list_type, data, prop))
+
     def operator(self, idname, text=None, **_):
         props = SimpleNamespace()
         self.log.append(("operator", idname, text, props))

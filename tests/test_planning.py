@@ -29,6 +29,12 @@ EXPECTED = {
     "anodised_titanium": (True, False, "noise", "parallel", True, True),
     "old_metal": (True, False, "noise", "parallel", True, True),
     "glazed_clay": (True, True, "noise", "parallel", False, True),
+    # Film stacks: one lobe of the stack's reflectance, read from tables (no transmitted lobes, no harmonics).
+    "jewel_beetle": (True, False, "noise", "parallel", False, False),
+    "morpho_blue": (True, False, "noise", "parallel", False, False),
+    "nacre": (True, True, "noise", "parallel", False, False),
+    "dichroic_glass": (True, False, "noise", "parallel", False, False),
+    "coated_lens": (True, False, "noise", "parallel", False, False),
 }
 
 
@@ -41,6 +47,7 @@ def test_planner_decision(name):
     plan = plan_effects(preset(name))
     assert (plan.specular, plan.diffuse, plan.thickness, plan.normals, plan.dispersion,
             plan.multibeam) == EXPECTED[name]
+    assert plan.stack == (preset(name).stack is not None) and (plan.tables or not plan.stack)
 
 
 def test_planner_rules():

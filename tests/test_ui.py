@@ -74,6 +74,9 @@ def test_settings_and_panel_come_from_param_specs():
     for spec in PARAM_SPECS:
         if spec.socket:
             continue
+        if spec.kind == "stack":  # the stack editor: a switch, the films' list, periods and disorder
+            assert {"use_stack", "stack_films", "stack_periods", "stack_disorder", "stack_kind"} <= set(rna.keys())
+            continue
         assert rna[spec.name].description == spec.description
         assert [i.identifier for i in rna[spec.name].enum_items] == list(spec.options)
         assert rna[spec.name].default == spec.default
@@ -82,7 +85,11 @@ def test_settings_and_panel_come_from_param_specs():
     log = draw_panels(obj)
     drawn = {e[3]: e for e in log if e[0] == "prop"}
     node = shader_node(mat)
+    assert any(e[0] == "list" and e[3] == "stack_films" for e in log)
     for spec in PARAM_SPECS:
+        if spec.kind == "stack":
+            assert any(e[0] == "prop" and e[1] == settings(mat) and e[2] == "use_stack" for e in log)
+            continue
         sock, channel = param_socket(node, spec.name) if spec.socket else (None, None)
         text = sock.name if channel is not None else properties.param_label(spec)  # a colour: drawn once
         assert text in drawn, f"{spec.name} not drawn"

@@ -15,6 +15,7 @@ from ..model.dispersion import ior_and_dispersion
 from ..model.params import (LayeredParams, ParameterError, ParamSpec, group_socket_name, option_label,
                             socket_tooltip)
 from .material_values import is_layered, params_of
+from . import stack_settings
 from .own_nodes import shader_node
 from .sockets import input_value, set_inputs
 from .stored_keys import setting_specs
@@ -94,15 +95,20 @@ def _spec_property(spec: ParamSpec):
     return FloatProperty(**kw)
 
 
+LayeredBRDFStackFilm = stack_settings.film_item_class(_updater("stack"))
+
+
 def _settings_class():
-    ann = {s.name: _spec_property(s) for s in setting_specs()}
+    ann = {s.name: _spec_property(s) for s in setting_specs() if s.kind != "stack"}
+    ann.update(stack_settings.stack_annotations(_updater("stack"), LayeredBRDFStackFilm))
     ann["backend"] = EnumProperty(name="Backend", description="How the material is built", items=BACKEND_ITEMS,
                                   default="nodes", update=_updater("backend"))
     ann["preset"] = StringProperty(name="Preset", description="The preset last loaded into the material")
     ann["adopted"] = BoolProperty(name="Adopted", options={"HIDDEN"},
                                   description="The settings describe the material (copied from it once)")
     return type("LayeredBRDFSettings", (bpy.types.PropertyGroup,),
-                {"__annotations__": ann, "__doc__": "Layered BRDF settings of a material"})
+                {"__annotations__": ann, "__doc__": "Layered BRDF settings of a material",
+                 "stack": stack_settings.stack_property()})
 
 
 LayeredBRDFSettings = _settings_class()

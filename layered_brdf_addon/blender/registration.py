@@ -8,10 +8,11 @@ from __future__ import annotations
 import bpy
 from bpy.props import PointerProperty
 
-from . import assets, fit_operator, freshness, operators, properties, sync, ui
+from . import assets, fit_operator, freshness, operators, properties, stack_ui, sync, ui
 from .stored_keys import SETTINGS
 
 CLASSES = (
+    properties.LayeredBRDFStackFilm,
     properties.LayeredBRDFSettings,
     operators.LAYERED_BRDF_OT_apply,
     operators.LAYERED_BRDF_OT_remove,
@@ -24,6 +25,7 @@ CLASSES = (
     operators.LAYERED_BRDF_OT_enable_osl,
     operators.LAYERED_BRDF_OT_param_info,
     fit_operator.LAYERED_BRDF_OT_fit_to_render,
+    *stack_ui.CLASSES,
     ui.LAYERED_BRDF_MT_presets,
     ui.LAYERED_BRDF_MT_delete_presets,
     ui.LAYERED_BRDF_PT_material,
@@ -67,7 +69,7 @@ def _ours(obj) -> bool:
 def _registered_versions(cls, everyone: bool = False) -> list:
     """``cls`` and same-named classes of earlier imports of this module that Blender holds registered
     (with ``everyone``, also those of another copy of the add-on)."""
-    bases = (bpy.types.PropertyGroup, bpy.types.Operator, bpy.types.Panel, bpy.types.Menu)
+    bases = (bpy.types.PropertyGroup, bpy.types.Operator, bpy.types.Panel, bpy.types.Menu, bpy.types.UIList)
     base = next(b for b in bases if issubclass(cls, b))
     return [c for c in _subclasses(base) if c.__name__ == cls.__name__ and c.is_registered
             and (everyone or _ours(c))]

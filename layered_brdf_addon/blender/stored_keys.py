@@ -10,6 +10,8 @@ Plain Python: imports no bpy.
 """
 from __future__ import annotations
 
+import json
+
 from ..model.params import BASE_COLOR_SOCKET, PARAM_SPECS, LayeredParams, ParameterError, ParamSpec
 
 # --- on materials ------------------------------------------------------------------------------
@@ -54,7 +56,14 @@ BASE_CHANNELS = tuple(s.name for s in sorted((s for s in PARAM_SPECS if s.socket
 
 def settings_record(params: LayeredParams) -> dict:
     """What a build records under :data:`ENUMS_KEY`: each setting's value."""
-    return {s.name: getattr(params, s.name) for s in setting_specs()}
+    return {s.name: _recordable(getattr(params, s.name)) for s in setting_specs()}
+
+
+def _recordable(value):
+    """A setting as an ID property holds it: a film stack as its JSON text ("" for none)."""
+    if value is None:
+        return ""
+    return json.dumps(value.to_dict(), sort_keys=True) if hasattr(value, "to_dict") else value
 
 
 def recorded_settings(mat) -> dict:

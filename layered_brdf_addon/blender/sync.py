@@ -98,7 +98,8 @@ def write_settings(mat, params: LayeredParams, backend: str) -> None:
     with suspended_updates():
         for s in setting_specs():
             # Written even when equal to the default, so that a later default cannot change it.
-            if getattr(st, s.name) != getattr(params, s.name) or not st.is_property_set(s.name):
+            if s.kind == "stack" or getattr(st, s.name) != getattr(params, s.name) or \
+                    not st.is_property_set(s.name):
                 setattr(st, s.name, getattr(params, s.name))
         if st.backend != backend:
             st.backend = backend
@@ -145,7 +146,8 @@ def follow_build(mat) -> None:
     backend = mat.get(BACKEND_KEY)
     with suspended_updates():
         for name, value in values.items():
-            if getattr(st, name) != value or not st.is_property_set(name):
+            # The stack is no property of its own (the stack editor's are): Blender does not record it as set.
+            if getattr(st, name) != value or (name in st.bl_rna.properties and not st.is_property_set(name)):
                 setattr(st, name, value)
         if backend in policy.BACKENDS and st.backend != backend:
             st.backend = backend

@@ -17,6 +17,7 @@ from .own_nodes import shader_node
 from .properties import param_label
 from .slots import displaced_material
 from .sockets import param_socket
+from .stack_ui import draw_stack
 from .sync import desired_or_problem
 from .targets import object_problem, takes_layered_material
 
@@ -168,7 +169,10 @@ class _ParamsPanel(Panel):
         self.layout.use_property_split = False
         for spec in PARAM_SPECS:
             if spec.group == self.group:
-                draw_param(self.layout, mat, node, spec)
+                if spec.kind == "stack":
+                    draw_stack(self.layout, mat)
+                else:
+                    draw_param(self.layout, mat, node, spec)
 
 
 def _params_panels():

@@ -29,13 +29,13 @@ from ..io.staging import (InterruptGuard, StagedOutputs, TargetError, check_targ
                           writing)
 from ..model.params import ParameterError
 from ..model.policy import render_plan
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, STACK_PRESETS, preset, preset_label
 from .gallery import GalleryLayout, compose_sheet, layout_for
 from .option_table import LOOKDEV_SAMPLES, LOOKDEV_SIZE, read_options
 from .render_job import view_png_encoding
 
 DEFAULT_OUTPUT = Path("out") / "lookdev.png"
-DEFAULT_PRESETS = tuple(ARTIST_PRESETS) + tuple(PAPER_PRESETS)
+DEFAULT_PRESETS = tuple(ARTIST_PRESETS) + tuple(STACK_PRESETS) + tuple(PAPER_PRESETS)
 DEFAULT_SIZE = LOOKDEV_SIZE
 DEFAULT_SAMPLES = LOOKDEV_SAMPLES
 BACKEND = "nodes"
@@ -91,9 +91,11 @@ def settings_from_options(options: dict[str, Any]) -> LookdevSettings:
 
 
 def tile_label(name: str) -> list[str]:
-    """A tile's caption: the preset's name for people, then its thickness range and indices."""
+    """A tile's caption: the preset's name for people, then its thickness range and indices (a stack's films)."""
     p = preset(name)
     d = f"{p.d_min:g}\u2013{p.d_max:g} nm" if p.d_min != p.d_max else f"{p.d_min:g} nm"
+    if p.stack is not None:
+        return [preset_label(name), f"{p.stack.count} films \u00b7 {d}"]
     return [preset_label(name), f"{d} \u00b7 n {p.r1_g:g}"]
 
 

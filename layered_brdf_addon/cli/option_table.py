@@ -18,7 +18,7 @@ import argparse
 from typing import Any, Mapping
 
 from ..model import policy
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, STACK_PRESETS
 from .fit_options import FIT_OPTIONS
 from .fit_options import START as FIT_START
 from .fit_options import TARGET as FIT_TARGET
@@ -86,8 +86,9 @@ SHEET_OPTIONS = (
                defaults={"gallery": "the paper's: " + ", ".join(PAPER_PRESETS)}, group=MATERIAL),
     OptionSpec("presets", "the presets to show", PRESETS_ALLOWED, lambda name, value: check_preset_names(value),
                ("lookdev",), metavar="NAME", nargs="+",
-               defaults={"lookdev": "every artist preset, then the paper's figures: "
-                         + ", ".join(list(ARTIST_PRESETS) + list(PAPER_PRESETS))}, group=MATERIAL),
+               defaults={"lookdev": "every artist preset, the structural colours, then the paper's figures: "
+                         + ", ".join(list(ARTIST_PRESETS) + list(STACK_PRESETS) + list(PAPER_PRESETS))},
+               group=MATERIAL),
     OptionSpec("hdri", "the HDRI of the sheet's world, one of Blender's bundled ones (forest, courtyard, studio, "
                "city, interior, night, sunrise, sunset)", HDRI_ALLOWED, hdri_name, ("lookdev",),
                defaults={"lookdev": "forest"}, metavar="NAME", group=SCENE),

@@ -11,6 +11,7 @@ import argparse
 import contextlib
 import re
 import sys
+from pathlib import Path
 from typing import Any, Iterator
 
 from ..model.params import PARAM_SPECS, ParamSpec, as_number
@@ -48,9 +49,22 @@ def _range_text(spec: ParamSpec) -> str:
     return "; ".join(parts)
 
 
+def stack_argument(text: str) -> str:
+    """A film stack's option: the text of a .json file holding the stack, or the JSON itself (the
+    parameters check it, naming the film and field of a bad value)."""
+    path = Path(text)
+    if text.strip().startswith(("{", "[")) or path.suffix.lower() != ".json":
+        return text
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise argparse.ArgumentTypeError(f"cannot read the stack file {text}: {e.strerror or e}") from None
+
+
 def param_help(spec: ParamSpec) -> str:
     """Help text of a parameter's option: description, unit, range, default."""
-    default = f"{spec.default:g}" if spec.kind == "float" else str(spec.default)
+    default = f"{spec.default:g}" if spec.kind == "float" else \
+        "none" if spec.kind == "stack" else str(spec.default)
     unit = f" {spec.unit}" if spec.unit and spec.kind == "float" else ""
     text = f"{spec.description} ({_range_text(spec)}; default {default}{unit})"
     return text.replace("%", "%%")
@@ -80,6 +94,9 @@ def add_param_options(parser: argparse.ArgumentParser) -> None:
         elif spec.kind == "enum":
             group.add_argument(flag, dest=spec.name, choices=spec.options, default=None,
                                metavar=param_metavar(spec), help=param_help(spec))
+        elif spec.kind == "stack":
+            group.add_argument(flag, dest=spec.name, type=stack_argument, default=None, metavar="FILE|JSON",
+                               help=param_help(spec))
         else:
             group.add_argument(flag, dest=spec.name, type=_number, default=None, metavar=param_metavar(spec),
                                help=param_help(spec))

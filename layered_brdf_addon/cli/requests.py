@@ -7,6 +7,8 @@ invalid option.  Nothing here imports bpy.
 """
 from __future__ import annotations
 
+import json
+
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -88,6 +90,8 @@ class RenderRequest:
             flag = option_flag(name)
             if spec.kind == "bool":
                 argv.append(flag if value else "--no-" + flag[2:])
+            elif spec.kind == "stack":
+                argv += [flag, json.dumps(value.to_dict() if hasattr(value, "to_dict") else value)]
             else:
                 argv += [flag, repr(value) if isinstance(value, float) else str(value)]
         return argv

@@ -51,6 +51,7 @@ import numpy as np
 
 from ..model.params import LOWER_MEDIA, LayeredParams
 from ..model.presets import PRESETS, preset
+from ..model.stack_presets import STACK_PRESETS
 from . import solve
 from .targets import SphereTarget
 
@@ -137,9 +138,10 @@ def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | No
             seen.add(key)
             out.append(Candidate(_label(name, p), p, name))
 
-    for name in PRESETS:  # the presets' own structures first: they claim a structure before a variant does
+    films = [name for name in PRESETS if name not in STACK_PRESETS]  # a fit's layer is one film
+    for name in films:  # the presets' own structures first: they claim a structure before a variant does
         add(name, preset(name))
-    for name in PRESETS:
+    for name in films:
         p = preset(name)
         for mode in NORMAL_MODES:
             if mode != p.normal_mode:
@@ -148,7 +150,7 @@ def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | No
     for c in [c for c in out if c.start.optics == "paper" and c.start.normal_mode == "tilted"]:
         for turn in TILT_AZIMUTHS_DEG:  # the paper's prism: its colours run along the tilt's azimuth
             add(c.preset, c.start.replace(tilt_azimuth=(c.start.tilt_azimuth + turn) % 360.0))
-    for name in PRESETS:  # physical optics over each named medium of the preset's kind (a metal, a dielectric)
+    for name in films:  # physical optics over each named medium of the preset's kind (a metal, a dielectric)
         p = preset(name)
         if p.optics == "physical" and p.base_layer != "transparent" and "lower_medium" not in pinned:
             for medium in LOWER_MEDIA[1:]:  # the named ones: "custom" is the values given

@@ -1,4 +1,4 @@
-"""Named materials: the paper's figures and artist presets, as data.
+"""Named materials: the paper's figures, artist presets and structural colour (film stacks), as data.
 
 Each preset is a mapping of overrides on :class:`LayeredParams` defaults.
 """
@@ -6,6 +6,9 @@ from __future__ import annotations
 
 from .media import layer_ior_values
 from .params import LayeredParams, ParameterError
+from .stack_presets import STACK_LABELS, STACK_PRESETS
+
+__all__ = ["ARTIST_PRESETS", "PAPER_PRESETS", "PRESETS", "PRESET_LABELS", "STACK_PRESETS", "preset", "preset_label"]
 
 PAPER_PRESETS: dict[str, dict] = {
     # Fig. 3: the diffuse part with thickness from Perlin noise.
@@ -75,7 +78,7 @@ ARTIST_PRESETS: dict[str, dict] = {
 for _overrides in PAPER_PRESETS.values():
     _overrides.setdefault("accuracy", "rgb")
 
-PRESETS: dict[str, dict] = {**PAPER_PRESETS, **ARTIST_PRESETS}
+PRESETS: dict[str, dict] = {**PAPER_PRESETS, **ARTIST_PRESETS, **STACK_PRESETS}
 
 
 PRESET_LABELS: dict[str, str] = {
@@ -85,6 +88,7 @@ PRESET_LABELS: dict[str, str] = {
     "fig6_medium": "Fig. 6 medium layer", "fig6_thick": "Fig. 6 thick layer",
     "soap_bubble": "Soap bubble", "oil_slick": "Oil slick", "beetle_shell": "Beetle shell",
     "anodised_titanium": "Anodised titanium", "old_metal": "Old metal", "glazed_clay": "Glazed clay",
+    **STACK_LABELS,
 }
 
 

@@ -21,7 +21,9 @@ Plain Python (no numpy, no bpy): a stack is a value of the material's parameters
 """
 from __future__ import annotations
 
+import json
 import math
+import struct
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
@@ -39,6 +41,12 @@ FILM_KEYS = ("medium", "thickness_nm", "ior", "dispersion", "k")
 STACK_KEYS = ("kind", "films", "periods", "disorder")
 
 
+def _single(x: float) -> float:
+    """``x`` as a 32-bit float holds it (a Blender property's), so that a stack read back equals the one
+    written."""
+    return struct.unpack("f", struct.pack("f", x))[0]
+
+
 def _number(name: str, value: Any, low: float, high: float, unit: str = "") -> float:
     allowed = f"a number in [{low:g}, {high:g}]{unit}"
     if isinstance(value, bool):
@@ -49,7 +57,7 @@ def _number(name: str, value: Any, low: float, high: float, unit: str = "") -> f
         raise ParameterError(name, value, allowed) from None
     if not math.isfinite(x) or not low <= x <= high:
         raise ParameterError(name, value, allowed)
-    return x
+    return _single(x)
 
 
 @dataclass(frozen=True)
@@ -181,7 +189,13 @@ class FilmStack:
 
 
 def stack_or_none(value: Any, where: str = "stack") -> FilmStack | None:
-    """``value`` as a stack (a mapping, a stack, or None / an empty mapping: no stack)."""
+    """``value`` as a stack: a mapping, a stack, its JSON text, or None / an empty mapping or text (no
+    stack)."""
+    if isinstance(value, str):
+        try:
+            value = json.loads(value) if value.strip() else None
+        except ValueError as e:
+            raise ParameterError(where, value[:60], f"a film stack as JSON ({e})") from None
     if value is None or (isinstance(value, Mapping) and not value):
         return None
     return FilmStack.from_dict(value, where)

@@ -50,12 +50,15 @@ FINEST_STEP_NM = 0.5
 
 
 @functools.lru_cache(maxsize=None)
-def _channel_weights(step_nm: float) -> tuple[np.ndarray, np.ndarray]:
+def _channel_weights(step_nm: float, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Wavelengths every ``step_nm`` at the middles of 380-780 nm's steps, moved by ``shift`` steps (in
+    [-0.5, 0.5]: every wavelength stays in the band), and their weights."""
     o = observer()
-    lams = np.arange(380.0, 780.0 + 1e-9, step_nm)
+    count = int(round(400.0 / step_nm))
+    lams = 380.0 + (np.arange(count) + 0.5 + shift) * step_nm
     cmf = np.stack([np.interp(lams, o["cmf_nm"], o["cmf"][:, i]) for i in range(3)], axis=-1)
     d65 = np.interp(lams, o["d65_nm"], o["d65"])
-    xyz = (d65 * np.gradient(lams))[:, None] * cmf  # (wavelengths, XYZ)
+    xyz = d65[:, None] * cmf  # (wavelengths, XYZ), each wavelength the width of one step
     rgb = xyz @ np.linalg.inv(o["rec709_to_xyz"]).T  # each wavelength's linear Rec.709
     rgb = rgb / rgb.sum(axis=0)  # a flat spectrum of 1 is (1, 1, 1)
     for a in (lams, rgb):
@@ -66,8 +69,7 @@ def _channel_weights(step_nm: float) -> tuple[np.ndarray, np.ndarray]:
 def spectral_step(optical_nm: float) -> float:
     """The wavelength step (nm) that samples the fringes of a stack of optical thickness ``optical_nm``
     (its largest ``n d``) :data:`SAMPLES_PER_SPECTRAL_FRINGE` times at 380 nm (a fringe is ``lambda^2 / (2 n
-    d)`` wide): 5 nm for thin stacks, down to :data:`FINEST_STEP_NM`; a divisor of 5 nm, so that the
-    analytic grid always holds :data:`SPECTRUM_NM`."""
+    d)`` wide): 5 nm for thin stacks, down to :data:`FINEST_STEP_NM`."""
     fringe = 380.0 ** 2 / (2.0 * max(optical_nm, 1e-9))
     for step in (5.0, 2.5, 1.25, 1.0, 0.5):
         if step <= fringe / SAMPLES_PER_SPECTRAL_FRINGE or step == FINEST_STEP_NM:
@@ -75,17 +77,18 @@ def spectral_step(optical_nm: float) -> float:
     return FINEST_STEP_NM
 
 
-def channel_weights(accuracy: str = "analytic", step_nm: float = 5.0) -> tuple[np.ndarray, np.ndarray]:
+def channel_weights(accuracy: str = "analytic", step_nm: float = 5.0, shift: float = 0.0):
     """``(wavelengths, M)``: the wavelengths a colour mode samples and the (wavelengths, 3) matrix that
     turns a spectrum there into linear Rec.709: the analytic mode sums 380-780 nm every ``step_nm`` (each
-    channel's band, :func:`spectral_step`), ``spectralN`` its N wavelengths (:func:`.spectral_tables.tables`),
-    ``rgb`` the paper's three wavelengths, one per channel."""
+    channel's band, :func:`spectral_step`; ``shift``: the wavelengths moved by that share of a step),
+    ``spectralN`` its N wavelengths (:func:`.spectral_tables.tables`), ``rgb`` the paper's three
+    wavelengths, one per channel."""
     if accuracy == "rgb":
         return np.asarray(CHANNEL_NM), np.eye(3)
     if accuracy.startswith("spectral"):
         t = tables(int(accuracy[len("spectral"):]))
         return np.asarray(t["wavelengths"], dtype=float), np.asarray(t["rgb"], dtype=float)
-    return _channel_weights(float(step_nm))
+    return _channel_weights(float(step_nm), float(shift))
 
 
 def _cauchy(values_rgb, wavelengths) -> np.ndarray:
@@ -181,7 +184,11 @@ def _media(n0, indices, lower, cos0, lams):
     n0_sin = n0 * np.sqrt(1.0 - c0 * c0)
     media = [np.full(lams.shape, n0 + 0j)] + [np.asarray(n, dtype=complex) for n in indices] + \
         [np.asarray(lower, dtype=complex)]
-    return media, [_cos_inside(n, n0_sin) for n in media]
+    cosines = {}  # a medium's cosines, once for the films that share its index array
+    for n in media:
+        if id(n) not in cosines:
+            cosines[id(n)] = _cos_inside(n, n0_sin)
+    return media, [cosines[id(n)] for n in media]
 
 
 def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths):
@@ -193,18 +200,31 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths):
     ``lower``: the lower medium's complex index (L,)."""
     lams = np.asarray(wavelengths, dtype=float)
     media, qs = _media(n0, indices, lower, cos0, lams)
-    bounds = [_boundary(media[j], qs[j], media[j + 1], qs[j + 1]) for j in range(len(media) - 1)]
+    # The sum runs in single precision (the films' many steps at half the cost; R within 1e-4 of double)
+    single, bounds, seen = [], [], {}
+    for j in range(len(media)):  # each medium's cosines and each pair's boundary once (a period's films repeat)
+        if ("q", id(media[j])) not in seen:
+            seen["q", id(media[j])] = qs[j].astype(np.complex64)
+        single.append(seen["q", id(media[j])])
+    for j in range(len(media) - 1):
+        pair = ("b", id(media[j]), id(media[j + 1]))
+        if pair not in seen:
+            seen[pair] = _boundary(media[j].astype(np.complex64), single[j], media[j + 1].astype(np.complex64),
+                                   single[j + 1])
+        bounds.append(seen[pair])
+    wave = (2j * np.pi / lams).astype(np.complex64)
     out = []
     for pol in (0, 2):  # s, p
         r, t = bounds[-1][pol], bounds[-1][pol + 1]
         for j in range(len(media) - 2, 0, -1):  # film j (media[j]), from the bottom up
-            d = np.asarray(thicknesses[j - 1], dtype=float)[..., None]
-            phase = np.exp(2j * np.pi * qs[j] * d / lams)  # e^{i beta}, |.| <= 1
+            d = np.asarray(thicknesses[j - 1], dtype=np.float32)[..., None]
+            phase = np.exp(single[j] * (d * wave))  # e^{i beta}, |.| <= 1
+            phase2 = phase * phase
             rb, tb = bounds[j - 1][pol], bounds[j - 1][pol + 1]
-            denominator = 1.0 + rb * r * phase * phase
-            t = tb * t * phase / denominator
-            r = (rb + r * phase * phase) / denominator
-        out.append((r, t))
+            inv = 1.0 / (1.0 + rb * r * phase2)
+            t = tb * t * phase * inv
+            r = (rb + r * phase2) * inv
+        out.append((r.astype(complex), t.astype(complex)))
     (rs, ts), (rp, tp) = out
     R = 0.5 * (np.abs(rs) ** 2 + np.abs(rp) ** 2)
     return np.clip(R, 0.0, 1.0), _power_ratio(ts, tp, media[0], qs[0], media[-1], qs[-1])
@@ -249,36 +269,72 @@ def disorder_draws(stack: FilmStack) -> np.ndarray:
     return np.maximum(1.0 + stack.disorder * g, 0.05)
 
 
-def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths):
-    """``(R, T)`` of ``stack`` scaled by ``scale`` (broadcasting with ``cos0``), its disorder averaged,
-    at ``wavelengths``: arrays of shape ``broadcast(cos0, scale) + (L,)``."""
+COHERENCE_SPREAD_NM = 95.0  # optical thickness spread past which a disordered stack's films no longer interfere
+# (a spread of ``n d`` of 95 nm spreads the round trip's phase by pi at 380 nm)
+
+
+def coherent_optical(stack: FilmStack) -> float:
+    """The optical thickness (nm, ``sum n d`` at scale 1) over which the stack's films interfere: the whole
+    stack without disorder; with it, the films from the top until the spread of their optical thickness
+    passes :data:`COHERENCE_SPREAD_NM` (deeper films add their light as incoherent films do), at least one
+    period.  It sets how finely the stack's colour is sampled in wavelength and thickness."""
+    total = spread = 0.0
+    for k, f in enumerate(stack.layers):
+        optical = f.thickness_nm * float(np.max(film_index(f, SPECTRUM_NM).real))
+        spread += (optical * stack.disorder) ** 2
+        if k >= len(stack.films) and spread > COHERENCE_SPREAD_NM ** 2:
+            break
+        total += optical
+    return total
+
+
+def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, draw=None):
+    """``(R, T)`` of ``stack`` scaled by ``scale`` (broadcasting with ``cos0``) at ``wavelengths``: arrays of
+    shape ``broadcast(cos0, scale) + (L,)``; ``draw``: the films' thickness factors of one draw of its
+    disorder (:func:`disorder_draws`), or None (none)."""
     lams = np.asarray(wavelengths, dtype=float)
-    indices = [film_index(f, lams) for f in stack.layers]
-    base = np.array([f.thickness_nm for f in stack.layers])
     cos0, scale = np.broadcast_arrays(np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float))
-    if not stack.disorder and stack.periods > 1:
+    if draw is None and stack.periods > 1:
         period = stack.films
         return periodic_reflect_transmit(n0, [film_index(f, lams) for f in period],
                                          [scale * f.thickness_nm for f in period], stack.periods, lower, cos0, lams)
-    R = T = 0.0
-    draws = disorder_draws(stack)
-    for factors in draws:
-        r, t = reflect_transmit(n0, indices, [scale * x for x in base * factors], lower, cos0, lams)
-        R, T = R + r, T + t
-    return R / len(draws), T / len(draws)
+    factors = np.ones(stack.count) if draw is None else draw
+    index = {f: film_index(f, lams) for f in stack.films}  # one array per film of the period: shared work
+    return reflect_transmit(n0, [index[f] for f in stack.layers],
+                            [scale * f.thickness_nm * x for f, x in zip(stack.layers, factors)], lower, cos0, lams)
 
 
 def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, accuracy: str = "analytic",
-                 lower_medium: str = "custom"):
+                 lower_medium: str = "custom", gamut: bool = True):
     """``(R, T)`` per channel, linear Rec.709 (..., 3), of ``stack`` at outside cosines ``cos0`` and
     scales ``scale`` (broadcasting), over a lower medium given per channel (``lower_rgb``: ``(r2, k2)``)
-    or named; the colour as ``accuracy`` sees it (:func:`channel_weights`)."""
-    optical = float(np.max(scale)) * sum(f.thickness_nm * float(np.max(film_index(f, SPECTRUM_NM).real))
-                                         for f in stack.layers)
-    lams, weights = channel_weights(accuracy, spectral_step(optical))
-    lower = lower_index(lower_rgb[0], lower_rgb[1], lams, lower_medium)
-    R, T = stack_spectra(stack, n0, lower, cos0, scale, lams)
-    return R @ weights, T @ weights
+    or named; the colour as ``accuracy`` sees it (:func:`channel_weights`: 'rgb' the paper's three
+    wavelengths, every other mode the band summed finely).
+
+    A disordered stack is averaged over its draws (:func:`disorder_draws`), each summed on wavelengths
+    moved by its share of a step: what a draw's fine fringes alias to, the draws average out (the analytic
+    mode's step follows the fringes of the films that interfere, :func:`coherent_optical`).  A colour outside
+    Rec.709's gamut (a saturated Bragg peak) is held within it channel by channel, ``R`` in [0, 1] and ``T``
+    in [0, 1 - R] (``gamut=False``: as the optics give it)."""
+    # Baked into tables, a stack's colour costs nothing per sample: every banded mode (analytic, spectralN)
+    # sums the whole band finely; 'rgb' keeps the paper's three wavelengths.
+    accuracy = "rgb" if accuracy == "rgb" else "analytic"
+    step = spectral_step(float(np.max(scale)) * coherent_optical(stack))
+    draws = [None] if not stack.disorder else list(disorder_draws(stack))
+    R = T = 0.0
+    for k, draw in enumerate(draws):
+        shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
+        lams, weights = channel_weights(accuracy, step, shift)
+        lower = lower_index(lower_rgb[0], lower_rgb[1], lams, lower_medium)
+        r, t = stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
+        R, T = R + r @ weights, T + t @ weights
+    # A saturated stack's colour can lie outside Rec.709 (a negative channel), which a closure's weight
+    # cannot hold: each channel within [0, 1], and what passes within what is not reflected.
+    R, T = R / len(draws), T / len(draws)
+    if not gamut:  # the optics' own colour (compared with thin-film optics)
+        return R, T
+    R = np.clip(R, 0.0, 1.0)
+    return R, np.clip(T, 0.0, 1.0 - R)
 
 
 HEMISPHERE_NODES = 8  # Gauss-Legendre nodes in cos^2 for a stack's mean reflectance over the hemisphere

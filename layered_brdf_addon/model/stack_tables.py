@@ -4,8 +4,8 @@ the node group and the OSL shader read a stack of 64 films as they read one film
 reflected lobe, one for the diffuse part and the Base Shader's factor, one for the lobe's anisotropy, and
 one for what passes to the base where the plan has a diffuse part.
 
-Rows along the thickness: :data:`.table_grid.SAMPLES_PER_FRINGE` per fringe of the whole stack (the
-finest its reflectance shows as the thickness scales, at the highest index of its films), within
+Rows along the thickness: :data:`.table_grid.SAMPLES_PER_FRINGE` per fringe of the films that interfere
+(the finest the stack's reflectance shows as the thickness scales), within
 :data:`.table_grid.MAX_TABLE_BYTES`.  numpy; no bpy.
 """
 from __future__ import annotations
@@ -22,7 +22,9 @@ from .plan import EffectPlan
 from .shading.inputs import clamped_inputs
 from .shading.stack_shade import stack_shade
 from .shading.tables import COS_SAMPLES, TableLayout
-from .stack_optics import SPECTRUM_NM, NodeResponse, StackResponse, film_index
+from .stack_optics import ANGLE_NODES, NodeResponse, StackResponse, coherent_optical
+
+DISORDERED_ANGLE_NODES = 33  # a disordered stack's colours change more slowly with the angle (measured: docs/stacks.md)
 
 
 def _place(plan: EffectPlan) -> str:
@@ -31,19 +33,16 @@ def _place(plan: EffectPlan) -> str:
     return "own" if plan.diffuse else "shared"
 
 
-def highest_index(params: LayeredParams) -> float:
-    """The highest real index of the stack's films over the visible band."""
-    return max(float(np.max(film_index(f, SPECTRUM_NM).real)) for f in params.stack.films)
-
-
 def stack_rows(params: LayeredParams, plan: EffectPlan, row: TableLayout) -> int:
     """Texels along the thickness: 1 for a constant one, else :data:`.table_grid.SAMPLES_PER_FRINGE` per
-    fringe of the whole stack (``lambda / (2 n)`` of its total thickness, the shortest wavelength, the highest
-    index) at least :data:`.table_grid.MIN_THICKNESS_SAMPLES`, within the bytes and rows a material's tables
+    fringe of the films that interfere (the whole stack without disorder, :func:`.stack_optics.coherent_optical`:
+    a fringe at the shortest wavelength per ``lambda / 2`` of their optical thickness as the scale runs over the
+    layer's range), at least :data:`.table_grid.MIN_THICKNESS_SAMPLES`, within the bytes and rows a material's tables
     may have (``row``: a layout of one row)."""
     if plan.thickness == "constant":
         return 1
-    fringes = 2.0 * highest_index(params) * abs(params.d_max - params.d_min) / table_grid.SHORTEST_NM
+    scales = abs(params.d_max - params.d_min) / params.stack.total_nm
+    fringes = 2.0 * coherent_optical(params.stack) * scales / table_grid.SHORTEST_NM
     wanted = max(math.ceil(table_grid.SAMPLES_PER_FRINGE * fringes) + 1, table_grid.MIN_THICKNESS_SAMPLES)
     most = min(table_grid.MAX_TABLE_BYTES // (row.images * row.image_width * 16), table_grid.MAX_THICKNESS_SAMPLES)
     return int(min(wanted, most))
@@ -66,7 +65,8 @@ def stack_grid(params: LayeredParams, plan: EffectPlan, layout: TableLayout):
     plan = replace(plan, tables=False)
     P = clamped_inputs(pt, plan)
     v, d, _ = table_grid.texel_grid(layout.width, layout.height, float(P["d_min"]), float(P["d_max"]))
-    response = NodeResponse(StackResponse.of(params), d[0, :, 0])
+    nodes = DISORDERED_ANGLE_NODES if params.stack.disorder else ANGLE_NODES
+    response = NodeResponse(StackResponse.of(params), d[0, :, 0], nodes)
     res = stack_shade(pt, plan, P, ops_numpy.vec(n0), ops_numpy.vec(v), d, response)
     return res, (res.extras["base_weight"], res.extras["transmittance"]), None
 
