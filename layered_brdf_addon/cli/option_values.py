@@ -12,12 +12,13 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 from ..model.params import PARAM_SPECS, ParameterError, as_number
 from ..io.messages import MAX_INT_DIGITS, shown  # noqa: F401 (the command line's names for them)
 from ..io.sidecar import MAX_RESOLUTION
 from ..model.presets import PRESETS
+from ..model.stack import stack_or_none
 
 PARAM_NAMES = tuple(s.name for s in PARAM_SPECS)
 
@@ -61,11 +62,20 @@ def _plain_scalar(value: Any) -> bool:
     return not isinstance(value, int) or abs(value) < 10 ** MAX_INT_DIGITS
 
 
+# Parameters whose value is a table of its own (a film stack: a mapping or its JSON text), with the check that
+# bounds it (at most 64 films of known fields).
+STRUCTURED = {"stack": stack_or_none}
+
+
 def check_plain(name: str, value: Any) -> Any:
     """``value`` if it is a plain value an option may take (a short text, a number that is not
     absurdly long, a flat list of at most :data:`MAX_ITEMS` of those); else
     :class:`ParameterError` naming ``name``.  Checked before the option's own validator,
-    so that none has to cope with a megabyte of text, nested lists or a 400-digit integer."""
+    so that none has to cope with a megabyte of text, nested lists or a 400-digit integer.  A film stack
+    (:data:`STRUCTURED`) is checked whole instead."""
+    if name in STRUCTURED and isinstance(value, (Mapping, str)):
+        STRUCTURED[name](value)  # checked as a whole (a stack's films and fields), its errors naming the field
+        return value
     items = value if isinstance(value, (list, tuple)) else [value]
     if len(items) > MAX_ITEMS or not all(map(_plain_scalar, items)):
         raise ParameterError(short_name(name), shown(value), allowed_for(name))

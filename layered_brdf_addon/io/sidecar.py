@@ -27,7 +27,10 @@ MAX_RESOLUTION = 16384  # pixels along an image's side, at most (a render's opti
 
 
 def to_jsonable(value: Any) -> Any:
-    """numpy scalars and arrays, paths and tuples as plain JSON values."""
+    """numpy scalars and arrays, paths, tuples and values that give their own dict (a film stack) as plain
+    JSON values."""
+    if hasattr(value, "to_dict") and not isinstance(value, Mapping):
+        return to_jsonable(value.to_dict())
     if isinstance(value, Mapping):
         return {str(k): to_jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):

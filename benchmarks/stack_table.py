@@ -1,0 +1,104 @@
+"""Film stacks: their colour against tmm, what their tables cost to bake and how well they hold.
+
+For every structural preset and for random stacks (2-64 films, dielectric and absorbing), at 0, 30 and 60
+degrees: the CIEDE2000 between the add-on's colour of the stack's mirror reflection (analytic mode and the
+paper's RGB) and tmm's spectrum at 1 nm seen under D65 (layered_brdf_reference/stack_colours.py); then per
+preset and per stack size, the bake's thread CPU time (median of ``--repeats``), its rows and bytes, and
+the tables' check against the stack computed per point (model/table_check.py: the light's L1, the share of
+highlights off by more than 2%, what passes to the base).  Prints aligned tables, markdown with
+``--markdown``.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+from layered_brdf_addon.model.params import LayeredParams
+from layered_brdf_addon.model.policy import plan_effects
+from layered_brdf_addon.model.presets import STACK_PRESETS, preset
+from layered_brdf_addon.model.table_bake import bake
+from layered_brdf_addon.model.table_check import check_tables
+from layered_brdf_reference.stack_colours import stack_error
+
+ANGLES = (0.0, 30.0, 60.0)
+
+
+def random_stack(seed: int, absorbing: bool) -> LayeredParams:
+    """A random stack of 2-64 films (IOR 1.3-2.5; absorbing: k up to 2 in a third of them), 20-250 nm each."""
+    rng = np.random.default_rng(seed)
+    films = [{"ior": round(float(rng.uniform(1.3, 2.5)), 3), "thickness_nm": round(float(rng.uniform(20, 250)), 1),
+              **({"k": round(float(rng.uniform(0, 2)), 3)} if absorbing and rng.random() < 1 / 3 else {})}
+             for _ in range(int(rng.integers(2, 65)))]
+    total = sum(f["thickness_nm"] for f in films)
+    return LayeredParams.from_dict(dict(optics="physical", stack={"kind": "list", "films": films},
+                                        lower_medium="glass", d_min=total * 0.95, d_max=total * 1.05))
+
+
+def colour_rows(randoms: int) -> list[tuple]:
+    cases = [(name, preset(name)) for name in STACK_PRESETS]
+    cases += [(f"random {k} ({'absorbing' if k % 2 else 'dielectric'}, {p.stack.count} films)", p)
+              for k, p in ((k, random_stack(k, bool(k % 2))) for k in range(randoms))]
+    rows = []
+    for name, p in cases:
+        rows.append((name, *(f"{stack_error(p, a):.2f}" for a in ANGLES),
+                     *(f"{stack_error(p, a, accuracy='rgb'):.1f}" for a in ANGLES)))
+    return rows
+
+
+COLOUR_HEADER = ("stack", *(f"analytic {a:g}°" for a in ANGLES), *(f"rgb {a:g}°" for a in ANGLES))
+
+
+def _sized(films: int, disorder: float) -> LayeredParams:
+    stack = {"films": [{"ior": 1.56, "thickness_nm": 90.0}, {"medium": "air", "thickness_nm": 97.5}],
+             "periods": films // 2, "disorder": disorder}
+    total = 187.5 * films / 2
+    return LayeredParams.from_dict(dict(optics="physical", stack=stack, lower_medium="chitin", kd=0.0,
+                                        d_min=total * 0.95, d_max=total * 1.05))
+
+
+def bake_rows(repeats: int) -> list[tuple]:
+    cases = [(name, preset(name)) for name in STACK_PRESETS]
+    cases += [(f"Bragg {n} films{', disorder 5%' if dis else ''}", _sized(n, dis)) for n in (16, 64)
+              for dis in (0.0, 0.05)]
+    rows = []
+    for name, p in cases:
+        plan = plan_effects(p)
+        times = []
+        for _ in range(repeats):
+            t0 = time.thread_time()
+            layout, texels = bake(p, plan)
+            times.append(time.thread_time() - t0)
+        c = check_tables(p, plan, layout, texels)
+        rows.append((name, str(p.stack.count), f"{statistics.median(times):.2f}", str(layout.height),
+                     f"{texels.nbytes / 1024:.0f}", f"{100 * c.l1:.2f}%", f"{100 * c.failing:.1f}%", f"{c.base:.3f}"))
+    return rows
+
+
+BAKE_HEADER = ("stack", "films", "bake (s, CPU)", "rows", "KiB", "L1", "highlights off", "base")
+
+
+def _table(header, rows, md: bool) -> str:
+    if md:
+        lines = ["| " + " | ".join(header) + " |", "|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|"]
+        return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
+    widths = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]
+    return "\n".join("  ".join(str(c).ljust(w) if i == 0 else str(c).rjust(w) for i, (c, w) in
+                               enumerate(zip(r, widths))) for r in [header] + rows)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--markdown", action="store_true", help="print markdown tables")
+    ap.add_argument("--randoms", type=int, default=6, help="random stacks in the colour table")
+    ap.add_argument("--repeats", type=int, default=3, help="bakes per stack (the median's)")
+    args = ap.parse_args(argv)
+    print(_table(COLOUR_HEADER, colour_rows(args.randoms), args.markdown))
+    print()
+    print(_table(BAKE_HEADER, bake_rows(args.repeats), args.markdown))
+
+
+if __name__ == "__main__":
+    main()
