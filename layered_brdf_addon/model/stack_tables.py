@@ -24,7 +24,6 @@ from .shading.stack_shade import stack_shade
 from .shading.tables import COS_SAMPLES, TableLayout
 from .stack_optics import ANGLE_NODES, NodeResponse, StackResponse, coherent_optical
 
-DISORDERED_ANGLE_NODES = 33  # a disordered stack's colours change more slowly with the angle (measured: docs/stacks.md)
 
 
 def _place(plan: EffectPlan) -> str:
@@ -65,8 +64,7 @@ def stack_grid(params: LayeredParams, plan: EffectPlan, layout: TableLayout):
     plan = replace(plan, tables=False)
     P = clamped_inputs(pt, plan)
     v, d, _ = table_grid.texel_grid(layout.width, layout.height, float(P["d_min"]), float(P["d_max"]))
-    nodes = DISORDERED_ANGLE_NODES if params.stack.disorder else ANGLE_NODES
-    response = NodeResponse(StackResponse.of(params), d[0, :, 0], nodes)
+    response = NodeResponse(StackResponse.of(params), d[0, :, 0], ANGLE_NODES)
     res = stack_shade(pt, plan, P, ops_numpy.vec(n0), ops_numpy.vec(v), d, response)
     return res, (res.extras["base_weight"], res.extras["transmittance"]), None
 
