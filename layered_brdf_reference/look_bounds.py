@@ -58,6 +58,25 @@ LOOKS: dict[str, Look] = {
 }
 
 
+# The structural colours (film stacks, docs/stacks.md), under Blender's five bundled HDRIs of the docs
+# (forest, courtyard, interior, sunset, city; tests/test_stack_looks.py).
+STACK_LOOKS: dict[str, Look] = {
+    # Green at normal incidence (the 530 nm Bragg peak), blue-shifted towards the rim as every Bragg stack is.
+    "jewel_beetle": Look("a metallic green-to-blue jewel over a dark body", hues=((90.0, 260.0),),
+                         hue_share=0.5, saturation=(0.5, 1.0), reflects=0.3, luminance=(0.0, 0.1)),
+    "morpho_blue": Look("an electric blue sheen over a dark scale", hues=((180.0, 270.0),), hue_share=0.6,
+                        saturation=(0.5, 1.0), luminance=(0.0, 0.1)),
+    "nacre": Look("a pale, pearly body with soft colours", saturation=(0.0, 0.55), sectors=3,
+                  luminance=(0.05, 0.3), reflects=0.2),
+    "dichroic_glass": Look("clear glass that reflects bright, shifting colours", sectors=4, saturation=(0.3, 1.0),
+                           reflects=0.5),
+    # A clear lens shows what lies behind it; its look is to reflect less than the bare glass
+    # (tests/test_stack_looks.py compares the two).
+    "coated_lens": Look("clear glass that reflects less than bare glass"),
+}
+LOOKS.update(STACK_LOOKS)
+
+
 def _hsv(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     rgb = np.maximum(np.asarray(rgb, dtype=float), 0.0)
     mx, mn = rgb.max(-1), rgb.min(-1)

@@ -13,7 +13,7 @@ from layered_brdf_addon.blender.lookdev import hdri_path
 from layered_brdf_addon.blender.material import apply_layered_material, shader_node
 from layered_brdf_reference.look_bounds import LOOKS, equirect_lookup, failures, measure, mirror_directions
 from layered_brdf_addon.model.base_layers import base_node, phong_to_roughness
-from layered_brdf_addon.model.presets import ARTIST_PRESETS, preset
+from layered_brdf_addon.model.presets import ARTIST_PRESETS, STACK_PRESETS, preset
 from layered_brdf_addon.model.sphere import Sun, sphere_geometry
 
 from blender_helpers import add_sphere
@@ -45,11 +45,12 @@ def looks():
     return {hdri: measure_rows(hdri)[0] for hdri in HDRIS}
 
 
-def measure_rows(hdri: str = HDRIS[0]) -> tuple[dict, np.ndarray]:
-    """Every row on a sphere under the HDRI, no sun: the statistics of each sphere's pixels,
-    and the render (linear)."""
+def measure_rows(hdri: str = HDRIS[0], rows=None) -> tuple[dict, np.ndarray]:
+    """Every row (of :data:`ROWS`, or ``rows``: (name, parameters), each name a look's) on a sphere under the
+    HDRI, no sun: the statistics of each sphere's pixels, and the render (linear)."""
+    rows = ROWS if rows is None else rows
     reset_blender()
-    n = len(ROWS)
+    n = len(rows)
     cam = camera_for(n, SIZE)
     centers = row_of_spheres(n)
     spheres = build_scene(SceneSpec(camera=cam, sun=Sun(strength=0.0), centers=centers, samples=SAMPLES))
@@ -61,7 +62,7 @@ def measure_rows(hdri: str = HDRIS[0]) -> tuple[dict, np.ndarray]:
     background = tree.nodes["Background"]
     background.inputs["Strength"].default_value = 1.0
     tree.links.new(env.outputs["Color"], background.inputs["Color"])
-    for k, (obj, (_, params)) in enumerate(zip(spheres, ROWS)):
+    for k, (obj, (_, params)) in enumerate(zip(spheres, rows)):
         apply_layered_material(obj, params, "nodes", name=f"Look{k}")
     beauty = render_passes().beauty[..., :3]
     geo = sphere_geometry(cam, centers)
@@ -70,14 +71,14 @@ def measure_rows(hdri: str = HDRIS[0]) -> tuple[dict, np.ndarray]:
     env.image.pixels.foreach_get(pixels)
     mirrored = equirect_lookup(pixels.reshape(h, w, 4), mirror_directions(geo.n0, geo.view))
     stats = {}
-    for k, (name, _) in enumerate(ROWS):
+    for k, (name, _) in enumerate(rows):
         look = LOOKS[name.removeprefix("replaced ")]
         stats[name] = measure(beauty, mirrored, geo.mask & (geo.sphere == k), look)
     return stats, beauty
 
 
 def test_every_artist_preset_has_a_look():
-    assert set(LOOKS) == set(ARTIST_PRESETS)
+    assert set(LOOKS) == set(ARTIST_PRESETS) | set(STACK_PRESETS)
 
 
 @pytest.mark.keeps_scene
