@@ -94,10 +94,14 @@ def main(argv=None) -> None:
     ap.add_argument("--markdown", action="store_true", help="print markdown tables")
     ap.add_argument("--randoms", type=int, default=6, help="random stacks in the colour table")
     ap.add_argument("--repeats", type=int, default=3, help="bakes per stack (the median's)")
+    ap.add_argument("--tables", nargs="+", choices=("colour", "bake"), default=("colour", "bake"),
+                    help="which tables to measure (default both)")
     args = ap.parse_args(argv)
-    print(_table(COLOUR_HEADER, colour_rows(args.randoms), args.markdown))
-    print()
-    print(_table(BAKE_HEADER, bake_rows(args.repeats), args.markdown))
+    if "colour" in args.tables:
+        print(_table(COLOUR_HEADER, colour_rows(args.randoms), args.markdown))
+        print()
+    if "bake" in args.tables:
+        print(_table(BAKE_HEADER, bake_rows(args.repeats), args.markdown))
 
 
 if __name__ == "__main__":

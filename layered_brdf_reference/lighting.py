@@ -46,7 +46,7 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
     """Pixels (P, 3) under a uniform environment of ``radiance``, by Monte Carlo.
 
     Directions come from a mixture of cosine sampling (1/3) and a Phong lobe about the
-    mirror direction (2/3, exponent half the narrower of ``e0`` and ``e1 / r1^2``); the
+    mirror direction (2/3, exponent half the narrower of ``e0`` and ``e1 / r1^2``, a stack's ``e0``); the
     estimator divides by the mixture density, so it is unbiased for any parameters.
     ``shading(params, n0, n1, d, l, v)`` (pixel per unit irradiance from ``l``) replaces
     the exact model, e.g. :func:`layered_brdf_reference.closures.closure_shading` for a white-furnace prediction.
@@ -58,7 +58,10 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
     P = n0.shape[0]
     v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
     r_v = reflect(-v, n0)
-    k = max(0.5 * min(params.e0, params.e1 / max(params.r1) ** 2), 1.0)
+    # A film stack has one lobe, of the top boundary (no transmitted lobe of its own exponent).
+    narrowest = params.e0 if getattr(params, "stack", None) is not None else \
+        min(params.e0, params.e1 / max(params.r1) ** 2)
+    k = max(0.5 * narrowest, 1.0)
     out = np.zeros((P, 3))
     batch = max(1, min(samples, 65536 // max(P, 1)))
     done = 0

@@ -38,12 +38,20 @@ def furnace_row(params_list, own_base: list[bool]):
     return render_furnace(params_list, "nodes", HEIGHT, SAMPLES, before=own_shaders)
 
 
+# A film stack that mirrors most of the light over a clear base (dichroic glass) renders each pixel from a
+# few long paths: its 95th percentile at 64 samples sits 0.2 above 1 (0.07 at 512 samples) where its mean is
+# 1.00. Its bound is on the ball's mean, whose noise is below 0.01.
+STACK_MEAN_NOISE = 0.01
+
+
 def p95_per_sphere(row) -> list[np.ndarray]:
+    """Per sphere, the 95th percentile per channel over the ball (a film stack's: the mean)."""
     geo = sphere_geometry(row.camera, row.centers)
     out = []
-    for k in range(len(row.params)):
+    for k, params in enumerate(row.params):
         sel = geo.mask & (geo.sphere == k) & (dot(geo.n0, geo.view) > 0.2)
-        out.append(np.percentile(row.passes.beauty[sel][:, :3], 95, axis=0))
+        pixels = row.passes.beauty[sel][:, :3]
+        out.append(pixels.mean(axis=0) if params.stack is not None else np.percentile(pixels, 95, axis=0))
     return out
 
 
@@ -67,8 +75,10 @@ def physical():
 @pytest.mark.parametrize("case", [c[0] for c in _cases("physical")])
 def test_no_preset_returns_more_light_than_it_receives(physical, case):
     got = physical[case]
-    print(f"{case}: p95 {got.round(3)}")
-    assert np.all(got <= LIMIT + NOISE), f"{case} returns {got.round(3)} of the light it receives"
+    stack = preset(case.split("/")[0]).stack is not None
+    print(f"{case}: {'mean' if stack else 'p95'} {got.round(3)}")
+    assert np.all(got <= LIMIT + (STACK_MEAN_NOISE if stack else NOISE)), \
+        f"{case} returns {got.round(3)} of the light it receives"
 
 
 def measure(optics: str) -> dict:

@@ -329,12 +329,28 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
         r, t = stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
         R, T = R + r @ weights, T + t @ weights
     # A saturated stack's colour can lie outside Rec.709 (a negative channel), which a closure's weight
-    # cannot hold: each channel within [0, 1], and what passes within what is not reflected.
+    # cannot hold: each channel within [0, 1] (within_gamut), what the films absorb kept, and what passes
+    # within what is not reflected.
     R, T = R / len(draws), T / len(draws)
     if not gamut:  # the optics' own colour (compared with thin-film optics)
         return R, T
-    R = np.clip(R, 0.0, 1.0)
-    return R, np.clip(T, 0.0, 1.0 - R)
+    absorbed = 1.0 - R - T
+    R = within_gamut(R)
+    return R, np.clip(1.0 - R - absorbed, 0.0, 1.0 - R)
+
+
+GAMUT_SOFTNESS = 0.05  # of a colour's brightest channel: how softly a channel outside [0, 1] is brought in
+
+
+def within_gamut(rgb):
+    """Channels of ``rgb`` (..., 3) held within [0, 1] smoothly: ``s log(1 + e^(x / s))`` towards 0 (and its
+    mirror towards 1), ``s`` :data:`GAMUT_SOFTNESS` of the colour's brightest channel, so that a colour that
+    leaves the gamut (a saturated Bragg peak's red) does not bend sharply where the tables' cubic splines
+    would overshoot; within a few ``s`` of the range's inside, a channel is its own value."""
+    rgb = np.asarray(rgb, dtype=float)
+    s = np.maximum(GAMUT_SOFTNESS * np.max(np.abs(rgb), axis=-1, keepdims=True), 1e-6)
+    low = s * np.logaddexp(0.0, rgb / s)
+    return 1.0 - s * np.logaddexp(0.0, (1.0 - low) / s)
 
 
 HEMISPHERE_NODES = 8  # Gauss-Legendre nodes in cos^2 for a stack's mean reflectance over the hemisphere
@@ -386,7 +402,7 @@ ANGLE_NODES = 33  # cosines a baked stack's optics are computed at (uniform in s
 
 class NodeResponse:
     """A :class:`StackResponse` computed at :data:`ANGLE_NODES` cosines per thickness of ``rows`` and joined by
-    cubic Hermite curves in ``sqrt(cos)`` (Fritsch-Carlson slopes: no overshoot): what a table's grid needs at
+    cubic Hermite curves in ``sqrt(cos)`` (Catmull-Rom slopes): what a table's grid needs at
     a fraction of the cost, the stack's reflectance being smooth in the angle once summed over each channel's
     band.  ``colour`` takes thicknesses of ``rows`` only."""
 
@@ -408,9 +424,7 @@ class NodeResponse:
         y0, y1 = values[i, row], values[i + 1, row]
         slopes = np.diff(values, axis=0) / h  # (n, rows, 3)
         m = np.zeros_like(values)
-        inner = slopes[:-1] * slopes[1:] > 0
-        m[1:-1] = np.where(inner, 2.0 / (1.0 / np.where(inner, slopes[:-1], 1.0) +
-                                         1.0 / np.where(inner, slopes[1:], 1.0)), 0.0)
+        m[1:-1] = 0.5 * (slopes[:-1] + slopes[1:])  # Catmull-Rom: a minimum keeps its curve
         m[0], m[-1] = slopes[0], slopes[-1]
         t = t[..., None]
         h00, h10, h01, h11 = 2 * t ** 3 - 3 * t ** 2 + 1, t ** 3 - 2 * t ** 2 + t, -2 * t ** 3 + 3 * t ** 2, \

@@ -64,7 +64,9 @@ def stack_grid(params: LayeredParams, plan: EffectPlan, layout: TableLayout):
     plan = replace(plan, tables=False)
     P = clamped_inputs(pt, plan)
     v, d, _ = table_grid.texel_grid(layout.width, layout.height, float(P["d_min"]), float(P["d_max"]))
-    response = NodeResponse(StackResponse.of(params), d[0, :, 0], ANGLE_NODES)
+    response = StackResponse.of(params)
+    if params.stack.disorder:  # its draws cost their films each: the optics at fewer angles, joined by cubics
+        response = NodeResponse(response, d[0, :, 0], ANGLE_NODES)
     res = stack_shade(pt, plan, P, ops_numpy.vec(n0), ops_numpy.vec(v), d, response)
     return res, (res.extras["base_weight"], res.extras["transmittance"]), None
 
