@@ -84,7 +84,8 @@ def label_lines(name: str, p: LayeredParams) -> list[str]:
         d = f"d {p.d_min:g} nm"
     else:
         d = f"d {p.d_min:g}\u2013{p.d_max:g} nm" + (" (height)" if p.thickness_mode == "height" else "")
-    n = f"n {p.r1_r:g} {p.r1_g:g} {p.r1_b:g}" if p.stack is None else f"stack of {p.stack.count} films"
+    films = f"stack of {p.stack.count} film{'s' if p.stack.count != 1 else ''}" if p.stack is not None else ""
+    n = films or f"n {p.r1_r:g} {p.r1_g:g} {p.r1_b:g}"
     if p.normal_mode == "tilted" and p.tilt:
         n += f" \u00b7 tilt {p.tilt:g}\u00b0"
     elif p.normal_mode == "correlated":
