@@ -11,7 +11,9 @@ its phase thickness,
 
 and likewise the transmission amplitude.  ``Im beta_j >= 0`` (the root that decays into an
 absorbing film), so ``e^{2 i beta}`` never grows: films of ``k`` up to 10 and microns of thickness
-stay finite, where the product of transfer matrices overflows.  Reflectance and transmittance are
+stay finite, where the product of transfer matrices overflows (:func:`reflect_transmit`, in single
+precision).  A periodic stack without disorder is its period combined with itself by Redheffer star
+products, ``log2(periods)`` of them (:func:`periodic_reflect_transmit`).  Reflectance and transmittance are
 the means of the s and p polarisations (unpolarised light); ``T`` is the power that enters the
 lower medium (absorbed there where it absorbs), ``1 - R - T`` what the films absorb.
 
@@ -21,10 +23,11 @@ film on its own, with that relative spread (a fixed seed: the same stack bakes t
 Where the spread of a film's phase passes a wave, the draws' interference averages out and the
 stack reflects as incoherent films do; where it is small, the stack keeps its colours.
 
-Colour: :func:`channel_weights` turns a spectrum sampled on :data:`SPECTRUM_NM` into linear
-Rec.709 per channel (the CIE 1931 observer under D65, :mod:`.spectral_tables`), each channel's
-weights summing to 1 (a flat spectrum of 0.3 reads 0.3 in every channel): the analytic mode's
-colour, integrated over each channel's band.  numpy; no bpy.
+Colour: :func:`channel_weights` turns a spectrum sampled over 380-780 nm (every 5 nm, finer where the
+films that interfere call for it, :func:`spectral_step`) into linear Rec.709 per channel (the CIE 1931
+observer under D65, :mod:`.spectral_tables`), each channel's weights summing to 1 (a flat spectrum of 0.3
+reads 0.3 in every channel): the analytic mode's colour, integrated over each channel's band, brought
+within the gamut by :func:`within_gamut`.  numpy; no bpy.
 """
 from __future__ import annotations
 
@@ -38,12 +41,11 @@ from .media import spectrum
 from .spectral_tables import observer, tables
 from .stack import FilmStack
 
-SPECTRUM_NM = np.arange(380.0, 781.0, 5.0)  # the wavelengths a stack's colour is summed over
+SPECTRUM_NM = np.arange(380.0, 781.0, 5.0)  # the band every 5 nm (where a film's highest index is looked up)
 DISORDER_DRAWS = 8  # stacks drawn to average a stack's disorder
 DISORDER_SEED = 20031  # their seed (the same stack, the same draws)
 MIN_COS = 1.0e-6  # the most grazing outside cosine the optics take
 CHANNEL_NM = (645.0, 525.0, 445.0)  # the paper's three wavelengths (the 'rgb' accuracy)
-
 
 SAMPLES_PER_SPECTRAL_FRINGE = 4  # wavelengths per fringe of the whole stack at the bluest (no aliasing)
 FINEST_STEP_NM = 0.5
@@ -397,7 +399,7 @@ class StackResponse:
         return np.tensordot(0.5 * w, R, axes=(0, 0)), np.tensordot(0.5 * w, T, axes=(0, 0))
 
 
-ANGLE_NODES = 33  # cosines a baked stack's optics are computed at (uniform in sqrt(cos), joined by cubics)
+ANGLE_NODES = 33  # cosines a disordered stack's optics are baked at (uniform in sqrt(cos), joined by cubics)
 
 
 class NodeResponse:
