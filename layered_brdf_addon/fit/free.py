@@ -45,8 +45,9 @@ def default_vary(start: LayeredParams) -> tuple[str, ...]:
 
 def film_vary(start: LayeredParams) -> tuple[str, ...]:
     """What a mirror reflectance tells: the layer's indices and thickness (a uniform film,
-    ``d_min``), the lower medium's n and k for physical optics over a custom medium."""
-    names = ["r1_r", "r1_g", "r1_b", "d_min"]
+    ``d_min``; a film stack's thickness only, its films' media and proportions kept: its period), the
+    lower medium's n and k for physical optics over a custom medium."""
+    names = ["d_min"] if start.stack is not None else ["r1_r", "r1_g", "r1_b", "d_min"]
     if start.optics == "physical" and start.lower_medium == "custom":
         names += ["r2_r", "r2_g", "r2_b", "k2_r", "k2_g", "k2_b"]
     return tuple(names)

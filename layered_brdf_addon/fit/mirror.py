@@ -5,7 +5,7 @@ parallel film; with lobes normalised to 1 (``(e + 2) / (2 pi) = 1``) and ``ks = 
 amplitudes integrated about that direction read as the film's reflectance:
 ``(AR + r1^2 AT + r1 AI) / cos_v`` with the paper's optics (``AT`` carries the in-layer lobe's
 ``1 / r1^2``, ``AI`` the square root of both), ``AR + AT + AI`` with thin-film optics, whose
-energy-keeping lobes carry the reflectance itself.  What a spectrophotometer or thin-film
+energy-keeping lobes carry the reflectance itself; a film stack's one lobe carries the stack's.  What a spectrophotometer or thin-film
 optics measures.
 """
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 from ..model import ops_numpy, program
 from ..model.params import WAVELENGTHS_NM, LayeredParams
 from ..model.policy import plan_effects
+from ..model.stack_optics import StackResponse, stack_colour
 
 UNIT_LOBE_EXPONENT = 2.0 * math.pi - 2.0  # (e + 2) / (2 pi) = 1
 SMOOTH_FACETS = 1.0e12  # the exponent of a smooth boundary's microfacets: they face the view's normal
@@ -35,6 +36,10 @@ def mirror_reflectance(params: LayeredParams, theta_deg: float, thickness_nm=Non
     plan = plan_effects(p)
     d = np.atleast_1d(np.asarray(p.d_min if thickness_nm is None else thickness_nm, dtype=float))
     cos_v = np.full(d.shape, math.cos(math.radians(theta_deg)))
+    if p.stack is not None:  # a stack's one lobe carries its reflectance, as the optics give it (out of gamut too)
+        s = StackResponse.of(p)
+        R, _ = stack_colour(s.stack, s.n0, s.lower_rgb, cos_v, s.scale(d), s.accuracy, s.lower_medium, gamut=False)
+        return R[0] if thickness_nm is None else R
     one = np.ones(d.shape)
     r1 = ops_numpy.triple(*p.r1)
     e = UNIT_LOBE_EXPONENT

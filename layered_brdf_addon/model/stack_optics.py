@@ -32,6 +32,8 @@ within the gamut by :func:`within_gamut`.  numpy; no bpy.
 from __future__ import annotations
 
 import functools
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -307,7 +309,7 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
 
 
 def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, accuracy: str = "analytic",
-                 lower_medium: str = "custom", gamut: bool = True):
+                 lower_medium: str = "custom", gamut: bool = True, step_nm: float | None = None):
     """``(R, T)`` per channel, linear Rec.709 (..., 3), of ``stack`` at outside cosines ``cos0`` and
     scales ``scale`` (broadcasting), over a lower medium given per channel (``lower_rgb``: ``(r2, k2)``)
     or named; the colour as ``accuracy`` sees it (:func:`channel_weights`: 'rgb' the paper's three
@@ -317,11 +319,12 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
     moved by its share of a step: what a draw's fine fringes alias to, the draws average out (the analytic
     mode's step follows the fringes of the films that interfere, :func:`coherent_optical`).  A colour outside
     Rec.709's gamut (a saturated Bragg peak) is held within it channel by channel, ``R`` in [0, 1] and ``T``
-    in [0, 1 - R] (``gamut=False``: as the optics give it)."""
+    in [0, 1 - R] (``gamut=False``: as the optics give it).  ``step_nm``: the wavelength step, where the caller
+    chose it for more points than these (:func:`spectral_step` of the largest scale otherwise)."""
     # Baked into tables, a stack's colour costs nothing per sample: every banded mode (analytic, spectralN)
     # sums the whole band finely; 'rgb' keeps the paper's three wavelengths.
     accuracy = "rgb" if accuracy == "rgb" else "analytic"
-    step = spectral_step(float(np.max(scale)) * coherent_optical(stack))
+    step = spectral_step(float(np.max(scale)) * coherent_optical(stack)) if step_nm is None else step_nm
     draws = [None] if not stack.disorder else list(disorder_draws(stack))
     R = T = 0.0
     for k, draw in enumerate(draws):
@@ -355,6 +358,7 @@ def within_gamut(rgb):
     return 1.0 - s * np.logaddexp(0.0, (1.0 - low) / s)
 
 
+PAIRS_PER_THREAD = 256  # points a thread takes at least
 HEMISPHERE_NODES = 8  # Gauss-Legendre nodes in cos^2 for a stack's mean reflectance over the hemisphere
 
 
@@ -384,8 +388,18 @@ class StackResponse:
         each distinct pair computed once (a table's grid repeats its rows' thicknesses along every column)."""
         cos0, d = np.broadcast_arrays(np.asarray(cos0, dtype=float), np.asarray(d, dtype=float))
         pairs, where = np.unique(np.stack([cos0.ravel(), d.ravel()], axis=-1), axis=0, return_inverse=True)
-        R, T = stack_colour(self.stack, self.n0, self.lower_rgb, pairs[:, 0], self.scale(pairs[:, 1]),
-                            self.accuracy, self.lower_medium)
+        scales = self.scale(pairs[:, 1])
+        step = spectral_step(float(np.max(scales)) * coherent_optical(self.stack))
+        workers = max(1, min(os.cpu_count() or 1, len(pairs) // PAIRS_PER_THREAD))
+
+        def part(index):
+            return stack_colour(self.stack, self.n0, self.lower_rgb, pairs[index, 0], scales[index], self.accuracy,
+                                self.lower_medium, step_nm=step)
+
+        # numpy lets go of Python's lock in its array loops: the points' parts run on every core
+        with ThreadPoolExecutor(workers) as pool:
+            parts = list(pool.map(part, np.array_split(np.arange(len(pairs)), workers)))
+        R, T = (np.concatenate([p[k] for p in parts]) for k in (0, 1))
         where = np.asarray(where).ravel()
         return R[where].reshape(cos0.shape + (3,)), T[where].reshape(cos0.shape + (3,))
 
