@@ -26,7 +26,7 @@ from layered_brdf_addon.blender.scene import reset_blender
 from layered_brdf_addon.blender.material import shader_node
 from layered_brdf_addon.backends import node_group as node_group_builder
 from layered_brdf_addon.model.params import LayeredParams, ParameterError
-from layered_brdf_addon.model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset, preset_label
+from layered_brdf_addon.model.presets import ARTIST_PRESETS, PAPER_PRESETS, STACK_PRESETS, preset, preset_label
 
 from blender_helpers import addon, user_dir, add_sphere, load_preset
 
@@ -113,13 +113,15 @@ def test_every_preset_and_user_preset_is_a_named_look_in_a_written_catalog(tmp_p
     assert [(lib.name, lib.path) for lib in libs] == prefs_before
 
     assert listing(folder) == sorted([LIBRARY_FILE, CATALOG_FILE, MANIFEST_FILE])
-    expected = {preset_label(n): n for n in [*ARTIST_PRESETS, *PAPER_PRESETS]} | {"Blue film": "user:Blue film"}
+    expected = {preset_label(n): n for n in [*ARTIST_PRESETS, *STACK_PRESETS, *PAPER_PRESETS]} | \
+        {"Blue film": "user:Blue film"}
     assert library_names(folder / LIBRARY_FILE) == sorted(expected)
     cats = read_catalogs(folder / CATALOG_FILE)
     assert {path for path, _ in cats.values()} == {"Layered BRDF", "Layered BRDF/Artist looks",
-                                                  "Layered BRDF/Paper figures", "Layered BRDF/User presets"}
+                                                  "Layered BRDF/Paper figures", "Layered BRDF/Structural colours",
+                                                  "Layered BRDF/User presets"}
     catalog_of = {"artist": "Layered BRDF/Artist looks", "paper": "Layered BRDF/Paper figures",
-                  "user": "Layered BRDF/User presets"}
+                  "structural": "Layered BRDF/Structural colours", "user": "Layered BRDF/User presets"}
     reset_blender()
     looks = append_materials(folder / LIBRARY_FILE)
     assert sorted(looks) == sorted(expected)

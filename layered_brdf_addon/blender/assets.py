@@ -25,7 +25,7 @@ from bpy.app.handlers import persistent
 from ..backends import node_group as node_group_builder
 from ..model.params import LayeredParams, ParameterError
 from ..model.policy import plan_effects
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, preset, preset_label
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, PRESETS, STACK_PRESETS, preset, preset_label
 from . import lookdev, tempdirs, user_presets
 from .catalogs import CATALOGS, ROOT_CATALOG
 from .material_values import params_of, settings
@@ -43,7 +43,8 @@ PREVIEW_SIZE_RANGE = (8, 512)
 PREVIEW_SAMPLES_RANGE = (1, 4096)
 
 
-KIND_TAGS = {"artist": "artist look", "paper": "paper figure", "user": "user preset"}
+KIND_TAGS = {"artist": "artist look", "paper": "paper figure", "structural": "structural colour",
+             "user": "user preset"}
 
 # What versions before looks put on the add-on's node groups (taken off by release_node_groups).
 LEGACY_CATALOG_ID = "4b0f3f52-5d0c-4c55-9d2e-6b8d1c1f7a21"
@@ -57,11 +58,14 @@ _timers: list = globals().get("_timers", [])
 
 # --- looks: names, catalogs, metadata ----------------------------------------------------------
 def kind_of(identifier: str) -> str:
-    """``"paper"``, ``"artist"`` or ``"user"``: the catalog of a preset identifier."""
+    """``"paper"``, ``"artist"``, ``"structural"`` (a film stack) or ``"user"``: the catalog of a preset
+    identifier."""
     if identifier in PAPER_PRESETS:
         return "paper"
     if identifier in ARTIST_PRESETS:
         return "artist"
+    if identifier in STACK_PRESETS:
+        return "structural"
     if identifier.startswith(user_presets.USER_PREFIX):
         return "user"
     raise ParameterError("preset", identifier, "one of " + ", ".join(PRESETS) + " or 'user:<name>'")
@@ -83,10 +87,12 @@ def describe_look(name: str, params: LayeredParams, kind: str) -> str:
     plan = plan_effects(params)
     origin = {"paper": "a figure of Granier & Heidrich's layered RGB BRDF paper (2003)",
               "artist": "an artist preset of the Layered BRDF add-on",
+              "structural": "a structural colour of the Layered BRDF add-on (a stack of films from the literature)",
               "user": "a Layered BRDF material"}[kind]
     indices = "/".join(_fmt(v) for v in (params.r1_r, params.r1_g, params.r1_b))
+    layer = f"index {indices} (R/G/B)" if params.stack is None else params.stack.describe()
     return (f"{name}: {origin}. Layer {_fmt(params.d_min)}-{_fmt(params.d_max)} nm thick "
-            f"({params.thickness_mode}), index {indices} (R/G/B), ks {_fmt(params.ks)}, kd {_fmt(params.kd)}; "
+            f"({params.thickness_mode}), {layer}, ks {_fmt(params.ks)}, kd {_fmt(params.kd)}; "
             + "; ".join(plan.describe())
             + ". Drop it on an object, then edit it in Properties > Material > Layered BRDF.")
 

@@ -49,6 +49,7 @@ ROOT_CATALOG = _catalog("Layered BRDF")
 CATALOGS = {
     "artist": _catalog("Layered BRDF/Artist looks"),
     "paper": _catalog("Layered BRDF/Paper figures"),
+    "structural": _catalog("Layered BRDF/Structural colours"),
     "user": _catalog("Layered BRDF/User presets"),
 }
 

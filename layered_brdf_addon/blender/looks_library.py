@@ -18,7 +18,7 @@ import bpy
 from ..io.staging import InterruptGuard
 from ..model.params import ParameterError
 from ..model.policy import render_plan
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, STACK_PRESETS
 from . import assets, library_folder, sync, user_presets
 from .catalogs import CATALOG_FILE
 from .library_folder import LIBRARY_FILE, Staging, check_directory, commit, read_folder, remove_stale_partials
@@ -43,9 +43,9 @@ class LibraryResult:
 
 
 def default_presets(include_user: bool = False) -> list[str]:
-    """The presets a library holds by default: the artist presets, the paper's figures and, with
-    ``include_user``, the saved user presets (``user:<name>``)."""
-    names = [*ARTIST_PRESETS, *PAPER_PRESETS]
+    """The presets a library holds by default: the artist presets, the structural colours, the paper's figures
+    and, with ``include_user``, the saved user presets (``user:<name>``)."""
+    names = [*ARTIST_PRESETS, *STACK_PRESETS, *PAPER_PRESETS]
     if include_user:
         names += [user_presets.USER_PREFIX + n for n in user_presets.user_preset_names()]
     return names

@@ -9,7 +9,7 @@ from bpy.types import Menu, Panel
 
 from ..model.params import PARAM_SPECS
 from ..model.policy import tables_fallback
-from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, preset_label
+from ..model.presets import ARTIST_PRESETS, PAPER_PRESETS, STACK_PRESETS, preset_label
 from . import assets, osl, user_presets
 from .animation import animated_parameters
 from .material_values import is_layered, layered_material_of, settings
@@ -199,6 +199,7 @@ class LAYERED_BRDF_MT_presets(Menu):
     def draw(self, context):
         layout = self.layout
         sections = (("Paper figures", list(PAPER_PRESETS)), ("Artist presets", list(ARTIST_PRESETS)),
+                    ("Structural colours", list(STACK_PRESETS)),
                     ("User presets", [user_presets.USER_PREFIX + n for n in user_presets.user_preset_names()]))
         for k, (title, identifiers) in enumerate(sections):
             if k:
