@@ -70,8 +70,8 @@ STACK_LOOKS: dict[str, Look] = {
                   luminance=(0.05, 0.3), reflects=0.2),
     "dichroic_glass": Look("clear glass that reflects bright, shifting colours", sectors=4, saturation=(0.3, 1.0),
                            reflects=0.5),
-    # A clear lens shows what lies behind it; its look is to reflect less than the bare glass
-    # (tests/test_stack_looks.py compares the two).
+    # A clear lens shows what lies behind it: no hue or saturation of its own to hold; its look is to reflect
+    # less than bare glass (tests/test_stack_looks.py compares their highlights under a sun).
     "coated_lens": Look("clear glass that reflects less than bare glass"),
 }
 LOOKS.update(STACK_LOOKS)
