@@ -59,3 +59,19 @@ def render_furnace(params_list, backend="nodes", height=32, samples=64, before=N
     set_uniform_environment(1.0)
     row.passes = render_passes_osl() if backend == "osl" else render_passes()
     return row
+
+
+def ring_means(row, names, rings) -> dict:
+    """The mean colour of each sphere of ``row`` (named in order by ``names``) over each ring of view cosines
+    (``rings``: name -> (above, at most)): ``{(name, ring): RGB}``."""
+    from layered_brdf_addon.model.geometry import dot
+    from layered_brdf_addon.model.sphere import sphere_geometry
+
+    geo = sphere_geometry(row.camera, row.centers)
+    mu = dot(geo.n0, geo.view)
+    out = {}
+    for k, name in enumerate(names):
+        for ring, (lo, hi) in rings.items():
+            sel = geo.mask & (geo.sphere == k) & (mu > lo) & (mu <= hi)
+            out[(name, ring)] = row.passes.beauty[sel][:, :3].mean(0)
+    return out

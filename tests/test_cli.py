@@ -135,6 +135,10 @@ def blend_file(tmp_path_factory) -> Path:
     (["--d-min", "100", "--d-max", "50"], ["'d_min'", "at most d_max"]),
     (["--blend", "garbage.blend", "--object", "Cube"], ["'blend'", "readable .blend"]),
     (["--blend", "missing.blend", "--object", "Cube"], ["'blend'", "No such file"]),
+    (["--preset", "coated_lens", "--stack", json.dumps({"films": [{"ior": 1.5, "k": 12, "thickness_nm": 50}]})],
+     ["'stack.films[0].k'", "[0, 10]"]),
+    (["--preset", "coated_lens", "--stack", json.dumps({"films": []})], ["'stack.films'", "1 to 64 films"]),
+    (["--preset", "coated_lens", "--stack", "missing.json"], ["missing.json"]),
 ])
 def test_invalid_render_exits_2_and_writes_nothing(tmp_path, args, names):
     (tmp_path / "garbage.blend").write_bytes(b"\x00\x01 not a blend")

@@ -6,9 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from layered_brdf_addon.model.geometry import dot
 from layered_brdf_addon.model.presets import preset
-from layered_brdf_addon.model.sphere import sphere_geometry
 
 pytestmark = pytest.mark.slow
 
@@ -27,18 +25,9 @@ FILMS = {
 
 
 def furnace(backend: str) -> dict:
-    from render_helpers import render_furnace
+    from render_helpers import render_furnace, ring_means
 
-    row = render_furnace(list(FILMS.values()), backend, HEIGHT, SAMPLES)
-    passes = row.passes
-    geo = sphere_geometry(row.camera, row.centers)
-    mu = dot(geo.n0, geo.view)
-    out = {}
-    for k, name in enumerate(FILMS):
-        for ring, (lo, hi) in RINGS.items():
-            sel = geo.mask & (geo.sphere == k) & (mu > lo) & (mu <= hi)
-            out[(name, ring)] = passes.beauty[sel][:, :3].mean(0)
-    return out
+    return ring_means(render_furnace(list(FILMS.values()), backend, HEIGHT, SAMPLES), FILMS, RINGS)
 
 
 @pytest.fixture(scope="module", params=["nodes", "osl"])

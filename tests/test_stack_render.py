@@ -10,13 +10,11 @@ import pytest
 
 from layered_brdf_addon.fit.cycles_closures import closure_shading
 from layered_brdf_addon.model import preset, render_spheres
-from layered_brdf_addon.model.geometry import dot
 from layered_brdf_addon.model.params import LayeredParams
-from layered_brdf_addon.model.sphere import sphere_geometry
 from layered_brdf_reference.compare import agreement, lit_mask
 
 from constants import MAX_FAILING, REL_TOL
-from render_helpers import render_furnace, render_row
+from render_helpers import render_furnace, render_row, ring_means
 
 pytestmark = pytest.mark.slow
 
@@ -40,15 +38,7 @@ LOSSLESS = {"dichroic glass": preset("dichroic_glass"), "coated lens": preset("c
 
 @pytest.fixture(scope="module", params=BACKENDS)
 def furnace(request):
-    row = render_furnace(list(LOSSLESS.values()), request.param, 48, 64)
-    geo = sphere_geometry(row.camera, row.centers)
-    mu = dot(geo.n0, geo.view)
-    out = {}
-    for k, name in enumerate(LOSSLESS):
-        for ring, (lo, hi) in RINGS.items():
-            sel = geo.mask & (geo.sphere == k) & (mu > lo) & (mu <= hi)
-            out[(name, ring)] = row.passes.beauty[sel][:, :3].mean(0)
-    return request.param, out
+    return request.param, ring_means(render_furnace(list(LOSSLESS.values()), request.param, 48, 64), LOSSLESS, RINGS)
 
 
 @pytest.mark.keeps_scene

@@ -14,7 +14,8 @@ import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from ..model.params import PARAM_SPECS, ParameterError, as_number
+from ..model.errors import checked_number
+from ..model.params import PARAM_SPECS, ParameterError
 from ..io.messages import MAX_INT_DIGITS, shown  # noqa: F401 (the command line's names for them)
 from ..io.sidecar import MAX_RESOLUTION
 from ..model.presets import PRESETS
@@ -129,16 +130,7 @@ def int_option(name: str, value: Any, lo: int, hi: int) -> int:
 
 
 def float_option(name: str, value: Any, lo: float = -math.inf, hi: float = math.inf) -> float:
-    allowed = f"a number in [{lo:g}, {hi:g}]"
-    if isinstance(value, bool):
-        raise ParameterError(name, value, allowed)
-    try:
-        x = as_number(value)
-    except (TypeError, ValueError):
-        raise ParameterError(name, value, allowed) from None
-    if not math.isfinite(x) or not lo <= x <= hi:
-        raise ParameterError(name, value, allowed)
-    return x
+    return checked_number(name, value, lo, hi)
 
 
 def parse_resolution(value: Any) -> tuple[int, int]:

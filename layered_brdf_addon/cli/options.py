@@ -14,7 +14,8 @@ import sys
 from pathlib import Path
 from typing import Any, Iterator
 
-from ..model.params import PARAM_SPECS, ParamSpec, as_number
+from ..model.errors import as_number
+from ..model.params import PARAM_SPECS, ParamSpec
 
 EXIT_OK, EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED = 0, 1, 2, 130
 

@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Iterator, Mapping
 
-from .errors import ParameterError
+from .errors import ParameterError, checked_number
 from .media import MEDIA, lower_medium_values, media_names
 from .dispersion import WAVELENGTHS_NM, abbe_indices  # the channels' wavelengths (SPEC)
 from .socket_units import ROUGHNESS, UNITS, socket_range, socket_units_of, to_socket
@@ -75,23 +75,7 @@ class ParamSpec:
             return value
         if self.kind == "stack":
             return stack_or_none(value, self.name)
-        if isinstance(value, bool):
-            raise ParameterError(self.name, value, self.allowed)
-        try:
-            x = as_number(value)
-        except (TypeError, ValueError):
-            raise ParameterError(self.name, value, self.allowed) from None
-        if not math.isfinite(x) or x < self.min or x > self.max:
-            raise ParameterError(self.name, value, self.allowed)
-        return x
-
-
-def as_number(value: Any) -> float:
-    """``float(value)``, refusing text that Python reads as a number but a person does not write as one:
-    digits grouped by underscores (``"1_5"`` is not 15)."""
-    if isinstance(value, str) and "_" in value:
-        raise ValueError(f"not a number: {value!r}")
-    return float(value)
+        return checked_number(self.name, value, self.min, self.max, f" {self.unit}" if self.unit else "")
 
 
 def _fmt(x: float) -> str:

@@ -22,12 +22,11 @@ Plain Python (no numpy, no bpy): a stack is a value of the material's parameters
 from __future__ import annotations
 
 import json
-import math
 import struct
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
-from .errors import ParameterError
+from .errors import ParameterError, checked_number
 from .media import media_names
 
 MAX_FILMS = 64  # films in a stack, at most (periods x films per period)
@@ -48,16 +47,7 @@ def _single(x: float) -> float:
 
 
 def _number(name: str, value: Any, low: float, high: float, unit: str = "") -> float:
-    allowed = f"a number in [{low:g}, {high:g}]{unit}"
-    if isinstance(value, bool):
-        raise ParameterError(name, value, allowed)
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(name, value, allowed) from None
-    if not math.isfinite(x) or not low <= x <= high:
-        raise ParameterError(name, value, allowed)
-    return _single(x)
+    return _single(checked_number(name, value, low, high, unit))
 
 
 @dataclass(frozen=True)
