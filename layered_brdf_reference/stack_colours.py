@@ -10,7 +10,6 @@ optics and their colour, not two samplings of the disorder.  The model side is
 from __future__ import annotations
 
 import numpy as np
-import tmm
 
 from layered_brdf_addon.model.media import spectrum
 from layered_brdf_addon.model.stack import FilmStack
@@ -28,19 +27,11 @@ def tmm_spectrum(stack: FilmStack, n0: float, lower, theta_deg: float, scale: fl
     ``lower`` (one per wavelength), its disorder averaged over the model's draws."""
     lams = np.asarray(wavelengths, dtype=float)
     indices = {f: film_index(f, lams) for f in stack.films}
-    R = np.zeros(lams.size)
-    T = np.zeros(lams.size)
     draws = disorder_draws(stack) if stack.disorder else np.ones((1, stack.count))
-    theta = np.radians(theta_deg)
-    for factors in draws:
-        d = [np.inf] + [scale * f.thickness_nm * x for f, x in zip(stack.layers, factors)] + [np.inf]
-        for i, lam in enumerate(lams):
-            n = [n0] + [indices[f][i] for f in stack.layers] + [lower[i]]
-            for pol in "sp":
-                out = tmm.coh_tmm(pol, n, d, theta, lam)
-                R[i] += 0.5 * out["R"]
-                T[i] += 0.5 * out["T"]
-    return R / len(draws), T / len(draws)
+    R, T = np.mean([thin_film.stack_reflectance_transmittance(
+        n0, [indices[f] for f in stack.layers], [scale * f.thickness_nm * x for f, x in zip(stack.layers, factors)],
+        lower, theta_deg, lams) for factors in draws], axis=0)
+    return R, T
 
 
 def reference_lab(stack: FilmStack, n0: float, lower_medium: str, lower_rgb, theta_deg: float,

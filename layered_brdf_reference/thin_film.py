@@ -46,22 +46,30 @@ def film_reflectance_transmittance(n_outside, n_film, n_below, thickness_nm, the
     per wavelength, ``n + 1j*k`` with ``k >= 0``.  ``T`` is the power that enters the
     below medium (absorbed there when it absorbs); ``1 - R - T`` is absorbed in the film.
     """
+    if not float(thickness_nm) >= 0:
+        raise ValueError("thickness_nm must be >= 0")
+    return stack_reflectance_transmittance(n_outside, [n_film], [thickness_nm], n_below, theta_deg, wavelengths_nm)
+
+
+def stack_reflectance_transmittance(n_outside, n_films, thicknesses_nm, n_below, theta_deg,
+                                    wavelengths_nm) -> tuple[np.ndarray, np.ndarray]:
+    """Unpolarised reflectance and transmittance of outside | films (top first) | below, per wavelength:
+    :func:`film_reflectance_transmittance` for any number of films (``n_films``: one index or one per
+    wavelength each; ``thicknesses_nm``: nm each)."""
     lams = np.atleast_1d(np.asarray(wavelengths_nm, dtype=float))
     n0 = _per_wavelength(n_outside, lams.size, "n_outside")
     if np.any(n0.imag != 0) or np.any(n0.real <= 0):
         raise ValueError("n_outside must be real and positive")
-    n1 = _per_wavelength(n_film, lams.size, "n_film")
+    films = [_per_wavelength(n, lams.size, "n_film") for n in n_films]
     n2 = _per_wavelength(n_below, lams.size, "n_below")
-    d = float(thickness_nm)
-    if not d >= 0:
-        raise ValueError("thickness_nm must be >= 0")
+    d = [np.inf, *(float(t) for t in thicknesses_nm), np.inf]
     theta = np.radians(float(theta_deg))
     r = np.empty(lams.size)
     t = np.empty(lams.size)
     for i, lam in enumerate(lams):
-        stack = [n0[i].real, n1[i], n2[i]]
-        s = tmm.coh_tmm("s", stack, [np.inf, d, np.inf], theta, lam)
-        p = tmm.coh_tmm("p", stack, [np.inf, d, np.inf], theta, lam)
+        stack = [n0[i].real, *(n[i] for n in films), n2[i]]
+        s = tmm.coh_tmm("s", stack, d, theta, lam)
+        p = tmm.coh_tmm("p", stack, d, theta, lam)
         r[i] = 0.5 * (s["R"] + p["R"])
         t[i] = 0.5 * (s["T"] + p["T"])
     return r, t

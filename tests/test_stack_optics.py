@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import tmm
 
 from layered_brdf_addon.model.presets import STACK_PRESETS, preset
 from layered_brdf_addon.model.stack import FilmStack
 from layered_brdf_addon.model.stack_optics import (SPECTRUM_NM, StackResponse, periodic_reflect_transmit,
                                                    reflect_transmit, stack_colour)
 from layered_brdf_reference.stack_colours import stack_error
+from layered_brdf_reference.thin_film import stack_reflectance_transmittance
 
 WAVES = np.arange(380.0, 781.0, 40.0)
 ANGLES = (0.0, 30.0, 60.0, 80.0)
@@ -29,14 +29,7 @@ def _random_stack(rng, absorbing: bool):
 
 
 def _tmm(indices, thicknesses, lower, theta):
-    R = np.zeros(WAVES.size)
-    T = np.zeros(WAVES.size)
-    for i, lam in enumerate(WAVES):
-        for pol in "sp":
-            out = tmm.coh_tmm(pol, [1.0, *indices, lower], [np.inf, *thicknesses, np.inf], np.radians(theta), lam)
-            R[i] += 0.5 * out["R"]
-            T[i] += 0.5 * out["T"]
-    return R, T
+    return stack_reflectance_transmittance(1.0, indices, thicknesses, lower, theta, WAVES)
 
 
 @pytest.mark.parametrize("absorbing", [False, True], ids=["dielectric", "absorbing"])

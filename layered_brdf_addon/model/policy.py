@@ -118,11 +118,11 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     dispersion = max(p.r1) - min(p.r1) > spread or moving("dispersion")
     spectral = spectral_count(p.accuracy)
     analytic = p.accuracy == "analytic"
+    if p.stack is not None:  # its films' own indices: no layer index, interference or harmonics to decide
+        return _stack_plan(p, moving, thickness, spectral, analytic)
     banded = bool(spectral) or analytic  # colour integrated over the band, where interference can average out
     # A linked thickness is not Thickness Min's: interference stays.
     interference = not (banded and not moving("interference") and not linked and interference_averages_out(p))
-    if p.stack is not None:
-        return _stack_plan(p, moving, thickness, spectral, analytic)
     physical = p.optics == "physical"
     multibeam = physical and interference and (moving("multibeam") or beam_contrast(p) > MULTIBEAM_CONTRAST)
     passes = not physical or moving("passes") or min(p.k2) < CLEAR_K
