@@ -3,8 +3,8 @@
 For every structural preset and for random stacks (2-64 films, dielectric and absorbing), at 0, 30 and 60
 degrees: the CIEDE2000 between the add-on's colour of the stack's mirror reflection (analytic mode and the
 paper's RGB) and tmm's spectrum at 1 nm seen under D65 (layered_brdf_reference/stack_colours.py); then per
-preset and per stack size, the bake's thread CPU time (median of ``--repeats``), its rows and bytes, and
-the tables' check against the stack computed per point (model/table_check.py: the light's L1, the share of
+preset and per stack size, the bake's CPU time (the process's, every thread's: a bake's points are split
+over the cores) and wall time (medians of ``--repeats``), its rows and bytes, and the tables' check against the stack computed per point (model/table_check.py: the light's L1, the share of
 highlights off by more than 2%, what passes to the base).  Prints aligned tables, markdown with
 ``--markdown``.
 """
@@ -66,18 +66,20 @@ def bake_rows(repeats: int) -> list[tuple]:
     rows = []
     for name, p in cases:
         plan = plan_effects(p)
-        times = []
+        times, walls = [], []
         for _ in range(repeats):
-            t0 = time.thread_time()
+            t0, w0 = time.process_time(), time.perf_counter()
             layout, texels = bake(p, plan)
-            times.append(time.thread_time() - t0)
+            times.append(time.process_time() - t0)
+            walls.append(time.perf_counter() - w0)
         c = check_tables(p, plan, layout, texels)
-        rows.append((name, str(p.stack.count), f"{statistics.median(times):.2f}", str(layout.height),
+        rows.append((name, str(p.stack.count), f"{statistics.median(times):.2f}", f"{statistics.median(walls):.2f}",
+                     str(layout.height),
                      f"{texels.nbytes / 1024:.0f}", f"{100 * c.l1:.2f}%", f"{100 * c.failing:.1f}%", f"{c.base:.3f}"))
     return rows
 
 
-BAKE_HEADER = ("stack", "films", "bake (s, CPU)", "rows", "KiB", "L1", "highlights off", "base")
+BAKE_HEADER = ("stack", "films", "bake (s, CPU)", "bake (s, wall)", "rows", "KiB", "L1", "highlights off", "base")
 
 
 def _table(header, rows, md: bool) -> str:

@@ -133,13 +133,7 @@ def _cos_inside(n, n0_sin):
 
 def _boundary(na, qa, nb, qb):
     """Fresnel amplitudes (r_s, t_s, r_p, t_p) from a medium (index ``na``, ``qa = na cos``) into another."""
-    rs = (qa - qb) / (qa + qb)
-    ts = 2.0 * qa / (qa + qb)
-    # p: with cosines c = q / n, r_p = (nb ca - na cb) / (nb ca + na cb)
-    a, b = nb * nb * qa, na * na * qb
-    rp = (a - b) / (a + b)
-    tp = 2.0 * na * nb * qa / (a + b)
-    return rs, ts, rp, tp
+    return _interface(na, qa, nb, qb, back=False)
 
 
 def _star(a, b):
@@ -164,12 +158,28 @@ def _power(cell, count: int):
     return out
 
 
-def _interface(na, qa, nb, qb):
+def _interface(na, qa, nb, qb, back: bool = True):
     """Per polarisation (s, p), the amplitudes ``(r, t, r', t')`` of the boundary from a medium of index
-    ``na`` (``qa = na cos``) into one of ``nb``: Fresnel's, ``r' = -r``."""
-    bounds = _boundary(na, qa, nb, qb)
-    back = _boundary(nb, qb, na, qa)
-    return [(bounds[i], bounds[i + 1], back[i], back[i + 1]) for i in (0, 2)]
+    ``na`` (``qa = na cos``) into one of ``nb``: Fresnel's, one division each.  ``r' = -r``, ``t = 1 + r``
+    and ``t' = 1 - r`` (s), ``t = (na / nb)(1 + r)`` and ``t' = (nb / na)(1 - r)`` (p, with
+    ``r = (nb^2 qa - na^2 qb) / (nb^2 qa + na^2 qb)``).  ``back=False``: ``(r_s, t_s, r_p, t_p)`` only."""
+    rs = (qa - qb) / (qa + qb)
+    a, b = nb * nb * qa, na * na * qb
+    rp = (a - b) / (a + b)
+    ratio = na / nb
+    s_ = (rs, 1.0 + rs, -rs, 1.0 - rs)
+    p_ = (rp, ratio * (1.0 + rp), -rp, (1.0 - rp) / ratio)
+    if not back:
+        return s_[0], s_[1], p_[0], p_[1]
+    return [s_, p_]
+
+
+def _through(cell, phase):
+    """``cell`` over a film's crossing (phase ``e^{i beta}`` each way, no bounce): ``cell`` star the film,
+    in a product's worth of multiplications."""
+    r, t, rb, tb = cell
+    phase2 = phase * phase
+    return r, t * phase, rb * phase2, tb * phase
 
 
 def _power_ratio(ts, tp, n0, q0, n2, q2):
@@ -186,12 +196,13 @@ def _media(n0, indices, lower, cos0, lams):
     # millionth off grazing, the stack reflects all but a millionth.
     c0 = np.clip(np.asarray(cos0, dtype=float), MIN_COS, 1.0)[..., None]
     n0_sin = n0 * np.sqrt(1.0 - c0 * c0)
-    media = [np.full(lams.shape, n0 + 0j)] + [np.asarray(n, dtype=complex) for n in indices] + \
-        [np.asarray(lower, dtype=complex)]
+    single = {}  # one single-precision array per index array (the films of a period share theirs)
+    media = [np.full(lams.shape, n0 + 0j, dtype=np.complex64)] + \
+        [single.setdefault(id(n), np.asarray(n, dtype=np.complex64)) for n in list(indices) + [lower]]
     cosines = {}  # a medium's cosines, once for the films that share its index array
     for n in media:
         if id(n) not in cosines:
-            cosines[id(n)] = _cos_inside(n, n0_sin)
+            cosines[id(n)] = _cos_inside(n.astype(complex), n0_sin).astype(np.complex64)  # grazing kept off 0
     return media, [cosines[id(n)] for n in media]
 
 
@@ -204,34 +215,32 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths):
     ``lower``: the lower medium's complex index (L,)."""
     lams = np.asarray(wavelengths, dtype=float)
     media, qs = _media(n0, indices, lower, cos0, lams)
-    # The sum runs in single precision (the films' many steps at half the cost; R within 1e-4 of double)
-    single, bounds, seen = [], [], {}
-    for j in range(len(media)):  # each medium's cosines and each pair's boundary once (a period's films repeat)
-        if ("q", id(media[j])) not in seen:
-            seen["q", id(media[j])] = qs[j].astype(np.complex64)
-        single.append(seen["q", id(media[j])])
-    for j in range(len(media) - 1):
-        pair = ("b", id(media[j]), id(media[j + 1]))
+    # The sum runs in single precision (the films' many steps at half the cost; R within 1e-4 of double), both
+    # polarisations at once (s and p on a first axis: each film's phase computed once for both)
+    bounds, seen = [], {}
+    for j in range(len(media) - 1):  # each pair's boundary once (a period's films repeat)
+        pair = (id(media[j]), id(media[j + 1]))
         if pair not in seen:
-            seen[pair] = _boundary(media[j].astype(np.complex64), single[j], media[j + 1].astype(np.complex64),
-                                   single[j + 1])
+            rs, ts, rp, tp = _boundary(media[j], qs[j], media[j + 1], qs[j + 1])
+            seen[pair] = (np.stack(np.broadcast_arrays(rs, rp)), np.stack(np.broadcast_arrays(ts, tp)))
         bounds.append(seen[pair])
+    # Where nothing absorbs, what is not reflected passes (R + T = 1): the transmitted amplitude is not summed
+    lossless = not any(np.any(m.imag) for m in media)
     wave = (2j * np.pi / lams).astype(np.complex64)
-    out = []
-    for pol in (0, 2):  # s, p
-        r, t = bounds[-1][pol], bounds[-1][pol + 1]
-        for j in range(len(media) - 2, 0, -1):  # film j (media[j]), from the bottom up
-            d = np.asarray(thicknesses[j - 1], dtype=np.float32)[..., None]
-            phase = np.exp(single[j] * (d * wave))  # e^{i beta}, |.| <= 1
-            phase2 = phase * phase
-            rb, tb = bounds[j - 1][pol], bounds[j - 1][pol + 1]
-            inv = 1.0 / (1.0 + rb * r * phase2)
+    r, t = bounds[-1]
+    for j in range(len(media) - 2, 0, -1):  # film j (media[j]), from the bottom up
+        d = np.asarray(thicknesses[j - 1], dtype=np.float32)[..., None]
+        phase = np.exp(qs[j] * (d * wave))  # e^{i beta}, |.| <= 1
+        phase2 = phase * phase
+        rb, tb = bounds[j - 1]
+        inv = 1.0 / (1.0 + rb * r * phase2)
+        if not lossless:
             t = tb * t * phase * inv
-            r = (rb + r * phase2) * inv
-        out.append((r.astype(complex), t.astype(complex)))
-    (rs, ts), (rp, tp) = out
-    R = 0.5 * (np.abs(rs) ** 2 + np.abs(rp) ** 2)
-    return np.clip(R, 0.0, 1.0), _power_ratio(ts, tp, media[0], qs[0], media[-1], qs[-1])
+        r = (rb + r * phase2) * inv
+    R = np.clip(0.5 * (np.abs(r[0]) ** 2 + np.abs(r[1]) ** 2), 0.0, 1.0)
+    if lossless:
+        return R, 1.0 - R
+    return R, _power_ratio(t[0], t[1], media[0], qs[0], media[-1], qs[-1])
 
 
 def periodic_reflect_transmit(n0: float, indices, thicknesses, periods: int, lower, cos0, wavelengths):
@@ -243,20 +252,28 @@ def periodic_reflect_transmit(n0: float, indices, thicknesses, periods: int, low
     lams = np.asarray(wavelengths, dtype=float)
     media, qs = _media(n0, indices, lower, cos0, lams)
     films = len(indices)
+    # In single precision, as reflect_transmit: each boundary once, for both polarisations
+    single = [q.astype(np.complex64) for q in qs]
+    index = [m.astype(np.complex64) for m in media]
+    wave = (2j * np.pi / lams).astype(np.complex64)
+
+    def boundary(a, b):
+        return _interface(index[a], single[a], index[b], single[b])
+
+    crossings = [np.exp(single[j] * (np.asarray(thicknesses[j - 1], dtype=np.float32)[..., None] * wave))
+                 for j in range(1, films + 1)]
+    inner = [boundary(j, j + 1 if j < films else 1) for j in range(1, films + 1)]  # the last into the next period
+    top, bottom = boundary(0, 1), boundary(1, len(media) - 1)
     out = []
     for pol in (0, 1):  # s, p
         cell = None
         for j in range(1, films + 1):
-            d = np.asarray(thicknesses[j - 1], dtype=float)[..., None]
-            phase = np.exp(2j * np.pi * qs[j] * d / lams)
-            zero = np.zeros_like(phase)
-            through = (zero, phase, zero, phase)
-            cell = through if cell is None else _star(cell, through)
-            below = j + 1 if j < films else 1  # the last film's boundary leads into the next period's first
-            if below != j:
-                cell = _star(cell, _interface(media[j], qs[j], media[below], qs[below])[pol])
-        stack = _star(_interface(media[0], qs[0], media[1], qs[1])[pol], _power(cell, periods))
-        stack = _star(stack, _interface(media[1], qs[1], media[-1], qs[-1])[pol])
+            phase = crossings[j - 1]
+            cell = (np.zeros_like(phase), phase, np.zeros_like(phase), phase) if cell is None else \
+                _through(cell, phase)
+            if films > 1 or j != 1:  # a period of one film has no boundary within it
+                cell = _star(cell, inner[j - 1][pol])
+        stack = _star(_star(top[pol], _power(cell, periods)), bottom[pol])
         out.append(stack)
     (rs, ts, _, _), (rp, tp, _, _) = out
     R = 0.5 * (np.abs(rs) ** 2 + np.abs(rp) ** 2)
@@ -297,7 +314,7 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
     shape ``broadcast(cos0, scale) + (L,)``; ``draw``: the films' thickness factors of one draw of its
     disorder (:func:`disorder_draws`), or None (none)."""
     lams = np.asarray(wavelengths, dtype=float)
-    cos0, scale = np.broadcast_arrays(np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float))
+    cos0, scale = np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float)  # broadcast as the phases are
     if draw is None and stack.periods > 1:
         period = stack.films
         return periodic_reflect_transmit(n0, [film_index(f, lams) for f in period],
@@ -385,23 +402,38 @@ class StackResponse:
 
     def colour(self, cos0, d):
         """``(R, T)`` per channel (..., 3) at outside cosines ``cos0`` and thicknesses ``d`` (broadcasting),
-        each distinct pair computed once (a table's grid repeats its rows' thicknesses along every column)."""
+        each distinct pair computed once.  Where the points are a grid (a table's texels: every cosine at
+        every thickness), the boundaries' amplitudes are computed once per cosine, not per texel
+        (:func:`stack_spectra` broadcasts the cosines against the scales)."""
         cos0, d = np.broadcast_arrays(np.asarray(cos0, dtype=float), np.asarray(d, dtype=float))
-        pairs, where = np.unique(np.stack([cos0.ravel(), d.ravel()], axis=-1), axis=0, return_inverse=True)
-        scales = self.scale(pairs[:, 1])
+        cosines, at_cos = np.unique(cos0.ravel(), return_inverse=True)
+        rows, at_row = np.unique(d.ravel(), return_inverse=True)
+        if len(cosines) * len(rows) <= 2 * cos0.size:  # a grid
+            R, T = self._computed(cosines[:, None], self.scale(rows)[None, :])
+            at = (np.asarray(at_cos).ravel(), np.asarray(at_row).ravel())
+        else:
+            pairs, where = np.unique(np.stack([cos0.ravel(), d.ravel()], axis=-1), axis=0, return_inverse=True)
+            R, T = self._computed(pairs[:, 0], self.scale(pairs[:, 1]))
+            at = (np.asarray(where).ravel(),)
+        return R[at].reshape(cos0.shape + (3,)), T[at].reshape(cos0.shape + (3,))
+
+    def _computed(self, cosines, scales):
+        """:func:`stack_colour` at ``cosines`` and ``scales`` (broadcasting, the first axis split between
+        the machine's cores: numpy lets go of Python's lock in its array loops)."""
         step = spectral_step(float(np.max(scales)) * coherent_optical(self.stack))
-        workers = max(1, min(os.cpu_count() or 1, len(pairs) // PAIRS_PER_THREAD))
+        points = np.broadcast_shapes(cosines.shape, scales.shape)
+        workers = max(1, min(os.cpu_count() or 1, int(np.prod(points)) // PAIRS_PER_THREAD, len(cosines)))
 
         def part(index):
-            return stack_colour(self.stack, self.n0, self.lower_rgb, pairs[index, 0], scales[index], self.accuracy,
+            return stack_colour(self.stack, self.n0, self.lower_rgb, cosines[index],
+                                scales[index] if scales.shape[0] == cosines.shape[0] else scales, self.accuracy,
                                 self.lower_medium, step_nm=step)
 
-        # numpy lets go of Python's lock in its array loops: the points' parts run on every core
         with ThreadPoolExecutor(workers) as pool:
-            parts = list(pool.map(part, np.array_split(np.arange(len(pairs)), workers)))
-        R, T = (np.concatenate([p[k] for p in parts]) for k in (0, 1))
-        where = np.asarray(where).ravel()
-        return R[where].reshape(cos0.shape + (3,)), T[where].reshape(cos0.shape + (3,))
+            parts = list(pool.map(part, np.array_split(np.arange(len(cosines)), workers)))
+        return tuple(np.concatenate([np.broadcast_to(p[k], (len(i),) + points[1:] + (3,))
+                                     for p, i in zip(parts, np.array_split(np.arange(len(cosines)), workers))])
+                     for k in (0, 1))
 
     def hemispherical(self, d):
         """``(R, T)`` averaged over the hemisphere, cosine-weighted (what light scattered under the stack
