@@ -50,7 +50,7 @@ def main(argv=None) -> None:
             table = Path(tmp) / f"{name}.csv"
             write_table(name, table)
             stem = (args.sheets or Path(tmp)) / f"stack-vs-film-{name.replace('_', '-')}"
-            cli.main(["fit", "--reflectance", str(table), "--output", str(stem), "--no-progress"])
+            cli.main(["fit", "--reflectance", str(table), "--layer", "film", "--output", str(stem), "--no-progress"])
             record = json.loads(stem.with_suffix(".json").read_text())
             p, fit = record["params"], record["fit"]
             film = (f"{p['optics']} optics, n {p['r1_r']:.2f}/{p['r1_g']:.2f}/{p['r1_b']:.2f}, {p['d_min']:.0f} nm over "

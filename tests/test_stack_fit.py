@@ -45,3 +45,19 @@ def test_the_fit_recovers_a_stack_s_period_from_tmm(tmp_path, name, scale):
     assert fit["vary"] == ["d_min"] and params["stack"] == preset(name).stack.to_dict()
     assert abs(params["d_min"] - total) <= PERIOD_TOL * total and params["d_max"] == params["d_min"]
     assert fit["mean_delta_e_2000"] <= COLOUR_TOL
+
+
+@pytest.mark.parametrize("name, scale", [("morpho_blue", 0.93), ("dichroic_glass", 1.05)])
+def test_a_fit_with_no_start_chooses_the_stack_and_its_period(tmp_path, name, scale):
+    """With no start the fit tries every structural preset's stack beside the films: tmm's reflectance of a
+    stack is given back as that stack (its films' media and proportions), at its period."""
+    total = _table(tmp_path / "stack.csv", name, scale)
+    code = cli.main(["fit", "--reflectance", str(tmp_path / "stack.csv"), "--output", str(tmp_path / "out" / "fit"),
+                     "--no-progress"])
+    assert code == 0
+    record = json.loads((tmp_path / "out" / "fit.json").read_text())
+    params, fit = record["params"], record["fit"]
+    print(f"{name} x{scale}: total {params['d_min']:.1f} nm (truth {total:.1f}), CIEDE2000 "
+          f"{fit['mean_delta_e_2000']:.3f}")
+    assert params["stack"] == preset(name).stack.to_dict()
+    assert abs(params["d_min"] - total) <= PERIOD_TOL * total and fit["mean_delta_e_2000"] <= COLOUR_TOL

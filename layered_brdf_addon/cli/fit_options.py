@@ -57,6 +57,16 @@ def _hdri_names(name: str, value: Any) -> tuple[str, ...]:
     return tuple(check_plain(name, n) for n in names)
 
 
+LAYERS = ("film", "stack")
+LAYER_ALLOWED = "one of " + ", ".join(LAYERS)
+
+
+def _layer(name: str, value: Any) -> str:
+    if value not in LAYERS:
+        raise ParameterError(name, shown(value), LAYER_ALLOWED)
+    return value
+
+
 def _mode(spec):
     def read(name: str, value: Any) -> str:
         if value not in spec.options:
@@ -103,6 +113,10 @@ FIT_OPTIONS = (
     OptionSpec("starts", "thickness orders tried besides the start", f"an integer in [{STARTS_RANGE[0]}, "
                f"{STARTS_RANGE[1]}]", ints(*STARTS_RANGE), ("fit",), defaults={"fit": str(STARTS_DEFAULT)},
                group=START, job=False),
+    OptionSpec("layer", "a fit with no start: whether its layer is one film or a stack of films (the structural "
+               "colours' structures, their period fitted)", LAYER_ALLOWED, _layer, ("fit",),
+               defaults={"fit": "either for --reflectance, one film otherwise"}, metavar="film|stack", group=START,
+               job=False),
     *(OptionSpec(spec.name, mode_help(spec), spec.allowed, _mode(spec), ("fit",), metavar=param_metavar(spec),
                  choices=spec.options, group=START, job=False) for spec in PARAM_SPECS if spec.name in MODE_OPTIONS),
     OptionSpec("output", "output stem: writes OUT.json and OUT.png", OUTPUT_ALLOWED, as_given, ("fit",),

@@ -118,10 +118,17 @@ def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
     given = read_options("fit", {k: v for k, v in options.items() if v is not None})
     source = source_of(given)
     select = given.get("start") is None and given.get("params") is None
+    layer = given.get("layer")
+    if layer is not None and not select:
+        raise ParameterError("layer", layer, "no value with --start or --params (their layer is the fit's)")
+    if layer == "stack" and source.kind != "reflectance":
+        raise ParameterError("layer", layer, "'film' for a render or a Principled material (a stack is fitted to "
+                             "a --reflectance table)")
     if select:
         pinned = mode_overrides(given)
-        start, pool = None, tuple(structure_pool(source.kind == "reflectance", pinned))
-        record = {"preset": None, "params_file": None, "chosen_by": "model selection", "overrides": pinned}
+        start, pool = None, tuple(structure_pool(source.kind == "reflectance", pinned, layer=layer))
+        record = {"preset": None, "params_file": None, "chosen_by": "model selection", "overrides": pinned,
+                  **({"layer": layer} if layer else {})}
     else:
         (start, record), pool = start_of(given), ()
     inputs = list(source.inputs)

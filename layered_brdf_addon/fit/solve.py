@@ -28,6 +28,8 @@ from .least_squares import least_squares
 
 THICKNESS_SCAN_NM = (20.0, 3000.0)
 THICKNESS_SCAN_STEPS = 28
+STACK_SCAN_SCALES = (0.5, 2.0)  # a film stack's total thickness scanned over these times its own (its period: a
+# Bragg peak moves with it, 5% a step)
 INDEX_SCAN_FACTORS = (0.88, 1.14)  # the layer's indices scanned too, where free: their refraction moves the colours
 SCAN_HALF_WIDTHS = (0.1, 0.4)  # relative half-widths of the range scanned, besides the start's
 LOSS_SCALE = 2.0  # CIELAB units where soft_l1 turns from quadratic to linear
@@ -181,12 +183,13 @@ def _soft_l1(r: np.ndarray) -> float:
 def thickness_starts(objective: _Objective, start: LayeredParams, count: int,
                      index_scan: bool = True) -> list[LayeredParams]:
     """The ``count`` best thickness ranges of a coarse scan (local minima of the loss along the mean
-    thickness, best first), at the start's relative width and at :data:`SCAN_HALF_WIDTHS`; with
+    thickness, best first; a film stack's total over :data:`STACK_SCAN_SCALES` of its own), at the start's relative width and at :data:`SCAN_HALF_WIDTHS`; with
     ``index_scan``, where the layer's three indices are free, at the start's indices scaled by
     :data:`INDEX_SCAN_FACTORS` too (a film of another index shows the same colours at another thickness,
     but refracts, and so tilts its colours, otherwise)."""
     lo, hi = start.d_min, start.d_max
-    mids = np.geomspace(*THICKNESS_SCAN_NM, THICKNESS_SCAN_STEPS)
+    mids = np.geomspace(*THICKNESS_SCAN_NM, THICKNESS_SCAN_STEPS) if start.stack is None else \
+        start.stack.total_nm * np.geomspace(*STACK_SCAN_SCALES, THICKNESS_SCAN_STEPS)
     if objective.free.uniform:
         candidates = [start.replace(d_min=m, d_max=m) for m in mids]
     else:

@@ -70,6 +70,8 @@ FINALIST_MARGIN = 1.25  # a candidate whose screening figure is within this fact
 NORMAL_MODES = ("parallel", "tilted", "correlated")
 TILT_START_DEG = 6.0  # a tilted candidate's start where its preset's lower boundary is parallel
 TILT_AZIMUTHS_DEG = (90.0, 180.0, 270.0)  # the paper's tilted candidates turned by these, besides their own
+STACK_FIXED = ("optics", "normal_mode")  # what a stack asks for (physical optics, a parallel boundary): a pin
+# of another value leaves the stacks out
 METAL_K = 0.5  # a lower medium whose extinction coefficient exceeds this in every channel is a metal
 
 
@@ -106,12 +108,17 @@ class Candidate:
 
 def _structure(p: LayeredParams) -> tuple:
     """A structure: its modes, whether it has a specular and a diffuse part (a start without one
-    cannot find it: its weight's slope vanishes with the lobe) and a tilted boundary's azimuth."""
+    cannot find it: its weight's slope vanishes with the lobe), a tilted boundary's azimuth and the
+    films of a stack (a stack keeps its films' media and proportions: each preset's is a structure)."""
     azimuth = round(p.tilt_azimuth) % 360 if p.normal_mode == "tilted" else None
-    return tuple(getattr(p, m) for m in STRUCTURE_MODES) + (p.ks > 0.0, p.kd > 0.0, azimuth)
+    films = None if p.stack is None else repr(p.stack.to_dict())
+    return tuple(getattr(p, m) for m in STRUCTURE_MODES) + (p.ks > 0.0, p.kd > 0.0, azimuth, films)
 
 
 def _label(name: str, p: LayeredParams) -> str:
+    if p.stack is not None:
+        films = f"{p.stack.count} film{'s' if p.stack.count != 1 else ''}"
+        return f"a stack of {films} over {p.lower_medium}, from {name}"
     medium = f" over {p.lower_medium}" if p.optics == "physical" else ""
     turned = f" (azimuth {p.tilt_azimuth:g} deg)" if p.normal_mode == "tilted" else ""
     base = {"none": "", "transparent": ", see-through", "metal": ", metal base"}[p.base_layer]
@@ -120,11 +127,14 @@ def _label(name: str, p: LayeredParams) -> str:
     return f"{p.optics} optics{medium}, lower boundary {p.normal_mode}{turned}{base}{diffuse}{noise}, from {name}"
 
 
-def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | None = None) -> list[Candidate]:
-    """The structures a fit tries: each preset's, with each lower boundary, the paper's tilted ones turned
-    by :data:`TILT_AZIMUTHS_DEG`, physical films over each named medium of their kind; ``pinned`` modes
-    (``{"optics": "paper"}``...) imposed on every candidate (the candidates that become alike merged),
-    ``thickness_mode`` too where given."""
+def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | None = None,
+               layers: Sequence[str] = ("film",)) -> list[Candidate]:
+    """The structures a fit tries: with ``"film"`` in ``layers``, each film preset's, with each lower
+    boundary, the paper's tilted ones turned by :data:`TILT_AZIMUTHS_DEG`, physical films over each named
+    medium of their kind; with ``"stack"``, each structural preset's stack (its films' media and proportions;
+    its period is what the fit finds); ``pinned`` modes (``{"optics": "paper"}``...) imposed on every
+    candidate (the candidates that become alike merged, a stack's that a pinned mode would make
+    impossible left out), ``thickness_mode`` too where given."""
     pinned = dict(pinned or {})
     out: list[Candidate] = []
     seen: set = set()
@@ -138,7 +148,12 @@ def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | No
             seen.add(key)
             out.append(Candidate(_label(name, p), p, name))
 
-    films = [name for name in PRESETS if name not in STACK_PRESETS]  # a fit's layer is one film
+    if "stack" in layers:
+        for name in STACK_PRESETS:
+            p = preset(name)
+            if all(getattr(p, m) == v for m, v in pinned.items() if m in STACK_FIXED):
+                add(name, p)
+    films = [name for name in PRESETS if name not in STACK_PRESETS] if "film" in layers else []
     for name in films:  # the presets' own structures first: they claim a structure before a variant does
         add(name, preset(name))
     for name in films:
@@ -199,17 +214,20 @@ def for_material(pool: Sequence[Candidate], surface: str | None, uniform_film: b
 
 
 def structure_pool(reflectance: bool = False, pinned: Mapping[str, str] | None = None,
-                   surface: str | None = None, uniform_film: bool = False) -> list[Candidate]:
+                   surface: str | None = None, uniform_film: bool = False, layer: str | None = None) -> list[Candidate]:
     """The structures a fit with no start chooses among, as the command line, the panel and the
     benchmarks ask for them: :func:`candidates` with the ``pinned`` modes, the thickness by height
     unless pinned (numpy reproduces a height pixel by pixel); for a ``reflectance`` table a smooth,
     uniform film (its lower boundary parallel unless pinned); for a Principled material the
-    structures of its ``surface`` and film (:func:`for_material`)."""
+    structures of its ``surface`` and film (:func:`for_material`).  ``layer``: "film" or "stack" only; by
+    default a reflectance table's pool holds both (a stack's mirror colours are what a table shows of it),
+    any other target's one film."""
     pinned = dict(pinned or {})
     if reflectance:
         pinned.setdefault("normal_mode", "parallel")
-    return for_material(candidates(pinned, thickness_mode=pinned.pop("thickness_mode", "height")), surface,
-                        uniform_film)
+    layers = (layer,) if layer else ("film", "stack") if reflectance else ("film",)
+    return for_material(candidates(pinned, thickness_mode=pinned.pop("thickness_mode", "height"), layers=layers),
+                        surface, uniform_film)
 
 
 def _metal(p: LayeredParams) -> bool:
