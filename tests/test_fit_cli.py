@@ -312,12 +312,6 @@ BAD_INPUTS = {
                                     ["'hdri'", "without --principled"]),
     "--tile of a reference render": (lambda folder: [*_scene_kind("reference")(folder), "--tile", "0"],
                                      ["'tile'", "one sphere"]),
-    "an unknown --layer": (lambda folder: [*_table(SPECTRUM)(folder), "--layer", "stacks"],
-                           ["'layer'", "'stacks'", "film, stack"]),
-    "--layer with --start": (lambda folder: [*_table(SPECTRUM)(folder), "--layer", "stack", "--start", "nacre"],
-                             ["'layer'", "no value with --start"]),
-    "--layer stack for a render": (lambda folder: [*_scene_kind("reference")(folder), "--layer", "stack"],
-                                   ["'layer'", "'film' for a render"]),
 }
 
 

@@ -61,3 +61,21 @@ def test_a_fit_with_no_start_chooses_the_stack_and_its_period(tmp_path, name, sc
           f"{fit['mean_delta_e_2000']:.3f}")
     assert params["stack"] == preset(name).stack.to_dict()
     assert abs(params["d_min"] - total) <= PERIOD_TOL * total and fit["mean_delta_e_2000"] <= COLOUR_TOL
+
+
+@pytest.mark.parametrize("extra, said", [
+    (["--layer", "stacks"], ["'layer'", "'stacks'", "film, stack"]),
+    (["--layer", "stack", "--start", "nacre"], ["'layer'", "no value with --start"]),
+    (["--layer", "stack", "--principled", "look.blend", "--material", "M"], ["'layer'", "'film' for a render"]),
+])
+def test_a_bad_layer_is_refused_naming_it_and_writes_nothing(tmp_path, capsys, extra, said):
+    _table(tmp_path / "stack.csv", "jewel_beetle", 1.0)
+    (tmp_path / "look.blend").write_bytes(b"")
+    target = [] if "--principled" in extra else ["--reflectance", str(tmp_path / "stack.csv")]
+    code = cli.main(["fit", *target, *[str(tmp_path / a) if a.endswith(".blend") else a for a in extra],
+                     "--output", str(tmp_path / "out" / "fit"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    for text in said:
+        assert text in err, (text, err)
+    assert not (tmp_path / "out").exists()

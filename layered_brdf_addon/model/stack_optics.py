@@ -418,21 +418,21 @@ class StackResponse:
         return R[at].reshape(cos0.shape + (3,)), T[at].reshape(cos0.shape + (3,))
 
     def _computed(self, cosines, scales):
-        """:func:`stack_colour` at ``cosines`` and ``scales`` (broadcasting, the first axis split between
-        the machine's cores: numpy lets go of Python's lock in its array loops)."""
+        """:func:`stack_colour` at ``cosines`` and ``scales``, both (N, 1) and (1, M) (a grid) or (P,) (pairs),
+        the first axis split between the machine's cores (numpy lets go of Python's lock in its array loops)."""
         step = spectral_step(float(np.max(scales)) * coherent_optical(self.stack))
+        grid = cosines.ndim == 2
         points = np.broadcast_shapes(cosines.shape, scales.shape)
         workers = max(1, min(os.cpu_count() or 1, int(np.prod(points)) // PAIRS_PER_THREAD, len(cosines)))
+        parts = np.array_split(np.arange(len(cosines)), workers)
 
         def part(index):
-            return stack_colour(self.stack, self.n0, self.lower_rgb, cosines[index],
-                                scales[index] if scales.shape[0] == cosines.shape[0] else scales, self.accuracy,
-                                self.lower_medium, step_nm=step)
+            return stack_colour(self.stack, self.n0, self.lower_rgb, cosines[index], scales if grid else scales[index],
+                                self.accuracy, self.lower_medium, step_nm=step)
 
         with ThreadPoolExecutor(workers) as pool:
-            parts = list(pool.map(part, np.array_split(np.arange(len(cosines)), workers)))
-        return tuple(np.concatenate([np.broadcast_to(p[k], (len(i),) + points[1:] + (3,))
-                                     for p, i in zip(parts, np.array_split(np.arange(len(cosines)), workers))])
+            done = list(pool.map(part, parts))
+        return tuple(np.concatenate([np.broadcast_to(d[k], (len(i),) + points[1:] + (3,)) for d, i in zip(done, parts)])
                      for k in (0, 1))
 
     def hemispherical(self, d):
