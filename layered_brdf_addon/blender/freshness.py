@@ -11,7 +11,8 @@ look.  Three handlers close every path (:func:`install`):
 * on a frame change (``frame_change_post``): the materials with keyframes or drivers, whose moving
   parameters a script can change without any update (the others cost two pointer tests each);
 * before a render (``render_init``, a still or a whole animation): every local material the add-on built
-  and every copy of a shader node in the file.
+  and every copy of a shader node in the file, once the stacks' tables baking beside the interface are
+  done (:mod:`.bake_jobs`).
 
 ``register()`` installs them; :func:`~.material.apply_layered_material` installs them too, so a script that
 only imports the add-on is covered.  They change data only on Blender's main thread (a render started
@@ -35,6 +36,7 @@ from ..model.params import LayeredParams, ParameterError
 from ..model.plan import EffectPlan
 from ..model.policy import render_plan
 from ..model.shading.tables import unread_by_tables
+from . import bake_jobs
 from . import osl as osl_backend
 from . import sync
 from .animation import animated_parameters
@@ -182,6 +184,9 @@ def freshen_all() -> list[str]:
     return done
 
 
+bake_jobs.when_done(freshen_all)  # a stack's tables baked beside the interface are taken by every material
+
+
 # --- handlers ------------------------------------------------------------------------------------
 def _edited_materials(depsgraph) -> set:
     """The materials an update touched: updated materials and the materials whose node tree was."""
@@ -221,8 +226,13 @@ def on_frame_change(scene, *_args):
 
 @persistent
 def before_render(scene, *_args):
+    # The bakes that run beside the interface are waited for (.bake_jobs): on the main thread here, from a
+    # render's own thread by holding it until the main thread's timer has given the materials their tables.
+    if not bake_jobs.finish():
+        print("Layered BRDF: a stack's tables were still baking when the render started", file=sys.stderr)
     if _main_thread():
-        freshen_all()
+        with bake_jobs.waiting():
+            freshen_all()
 
 
 HANDLERS = (("depsgraph_update_post", after_edit), ("frame_change_post", on_frame_change),

@@ -18,7 +18,7 @@ from ..backends.osl_shader import shader_source, tabulated_shader_source
 from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
 from ..model.table_check import checked_bake
-from . import paths, tempdirs
+from . import bake_jobs, paths, tempdirs
 from .stored_keys import TEXT_KEY
 from .tables import SETTINGS_KEY, settings_json, wanted_digest
 
@@ -106,6 +106,8 @@ def ensure_text(node, params: LayeredParams, plan: EffectPlan, check_sources: bo
     """Give the Script ``node`` the text for ``plan`` and ``params`` (compiled); True when it changed."""
     if text_current(node.script, params, plan, check_sources):
         return False
+    if plan.tables and bake_jobs.deferring(plan) and bake_jobs.start(params, plan, str(node.as_pointer())):
+        return False  # baked beside the interface (.bake_jobs): the node keeps its text until they are done
     compile_script_node(node, script=text_for(plan, params))
     return True
 

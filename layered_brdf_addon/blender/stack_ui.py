@@ -11,7 +11,8 @@ from .material_values import layered_material_of, params_of, settings
 from .own_nodes import shader_node
 from .sockets import input_value, set_inputs
 from .stack_settings import INDEX_ITEM, stack_from_settings
-from .sync import sync_material, updates_suspended
+from . import bake_jobs
+from .sync import desired, material_problem, sync_material, updates_suspended
 
 THICKNESS_SPREAD = 0.05  # "Thickness from Stack": the layer's range, the stack's total +- 5%
 
@@ -155,6 +156,10 @@ def draw_stack(layout, mat) -> None:
         col.label(text=f"Thickness Min / Max scale the stack by {low / stack.total_nm:.2f} - "
                        f"{high / stack.total_nm:.2f}", icon="DOT")
     col.operator(LAYERED_BRDF_OT_stack_thickness.bl_idname, icon="MOD_THICKNESS")
+    if bake_jobs.baking_any() and material_problem(mat) is None:
+        params, _, plan = desired(mat)
+        if bake_jobs.baking(params, plan):
+            col.label(text="Baking the stack's tables: the look follows when they are done", icon="TIME")
 
 
 CLASSES = (LAYERED_BRDF_UL_stack_films, LAYERED_BRDF_OT_stack_film, LAYERED_BRDF_OT_stack_thickness)

@@ -21,7 +21,7 @@ from ..model import policy
 from ..model.params import LayeredParams, ParameterError
 from ..model.plan import EffectPlan
 from ..model.policy import render_plan
-from . import assets
+from . import assets, bake_jobs
 from .animation import animated_parameters
 from .build import apply_layered_material, tree_current
 from .material_values import check_local, is_layered, layered_material_of, legacy_values, params_of, settings
@@ -175,6 +175,9 @@ def sync_material(mat, check_sources: bool = False) -> bool:
     params, backend, plan = desired(mat)
     if in_sync(mat, params, backend, plan, check_sources):
         return False
+    if bake_jobs.baking(params, plan) and mat.get(SYNC_KEY) == signature(mat, params, backend, plan) and \
+            tree_current(mat, shader_node(mat), backend, plan, params, tables=False):
+        return False  # built for these values; its tables are baking beside the interface (.bake_jobs)
     apply(mat, params, backend, plan, preview=False)
     return True
 

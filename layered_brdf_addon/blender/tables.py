@@ -24,6 +24,7 @@ from ..model.params import LayeredParams
 from ..model.plan import EffectPlan
 from ..model.table_bake import spline_coefficients, table_digest, table_layout
 from ..model.table_check import checked_bake
+from . import bake_jobs
 from .stored_keys import settings_record
 
 DIGEST_KEY = "layered_brdf_tables"  # on a group built for tables and on its images: the values they were baked for
@@ -171,11 +172,14 @@ def _existing(params: LayeredParams, plan: EffectPlan):
 def ensure_tables(node, params: LayeredParams, plan: EffectPlan, check_pixels: bool = False) -> bool:
     """Give the shader ``node`` (a group node running the group for ``plan``) tables baked for ``params``:
     kept when current, rebaked in place when only this node uses them, else another group (one already
-    baked for these values, or a copy of this one with tables of its own).  Returns True when something
-    was baked or the node's group changed."""
+    baked for these values, or a copy of this one with tables of its own).  A stack's tables are baked beside
+    the interface (:mod:`.bake_jobs`), the node keeping what it had until they are done.  Returns True when
+    something was baked or the node's group changed."""
     group = node.node_tree
     if tables_current(group, params, plan, check_pixels):
         return False
+    if bake_jobs.deferring(plan) and bake_jobs.start(params, plan, str(node.as_pointer())):
+        return False  # baked beside the interface: the node takes its tables when they are done
     layout = table_layout(params, plan)
     # A group whose Image Texture nodes are not all there (an artist deleted one) counts as of another shape.
     same_shape = group.get(node_group_builder.TABLE_SHAPE_KEY) == node_group_builder.layout_record(layout) and \

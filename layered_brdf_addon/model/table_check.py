@@ -9,7 +9,9 @@ Plain Python and numpy: the Blender layer, the command line and the tests call i
 """
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
+from concurrent.futures import CancelledError, Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -138,19 +140,92 @@ def _base_difference(computed, tabulated, shape) -> float:
 
 _KEPT = 8
 _checked: OrderedDict = OrderedDict()  # table digest -> (layout, texels, check), the most recent last
+_lock = threading.RLock()  # re-entered where cancelling a bake runs its done callback
+_running: dict = {}  # key -> the Future of a bake started by bake_later, until it is kept
+_owned: dict = {}  # owner -> the Future of the last bake it asked for
+_worker: ThreadPoolExecutor | None = None
+
+
+def _key(params: LayeredParams, plan: EffectPlan) -> str:
+    return f"{plan.key}:{table_digest(params, plan)}"
+
+
+def _bake_and_keep(key: str, params: LayeredParams, plan: EffectPlan):
+    layout, texels = bake(params, plan)
+    # A stack always reads its tables (it has no per-point shader): its check is the tests' and benchmarks'.
+    check = None if plan.stack else check_tables(params, plan, layout, texels)
+    with _lock:
+        _checked[key] = (layout, texels, check)
+        _checked.move_to_end(key)
+        while len(_checked) > _KEPT:
+            _checked.popitem(last=False)
+        return _checked[key]
 
 
 def checked_bake(params: LayeredParams, plan: EffectPlan):
     """``(layout, texels, check)``: the bake of ``params`` for ``plan`` and how far it is from the program (None
-    for a film stack's, :func:`check_tables` measures it); the last few are kept (by the tables' digest), so that checking a plan and baking its tables bake once."""
-    key = f"{plan.key}:{table_digest(params, plan)}"
-    if key in _checked:
-        _checked.move_to_end(key)
-        return _checked[key]
-    layout, texels = bake(params, plan)
-    # A stack always reads its tables (it has no per-point shader): its check is the tests' and benchmarks'.
-    check = None if plan.stack else check_tables(params, plan, layout, texels)
-    _checked[key] = (layout, texels, check)
-    while len(_checked) > _KEPT:
-        _checked.popitem(last=False)
-    return _checked[key]
+    for a film stack's, :func:`check_tables` measures it); the last few are kept (by the tables' digest), so
+    that checking a plan and baking its tables bake once, and a bake already running (:func:`bake_later`) is
+    waited for, not run again."""
+    key = _key(params, plan)
+    with _lock:
+        if key in _checked:
+            _checked.move_to_end(key)
+            return _checked[key]
+        running = _running.get(key)
+    if running is not None:
+        try:
+            return running.result()
+        except CancelledError:  # dropped before it started (another value asked for): bake it now
+            pass
+    return _bake_and_keep(key, params, plan)
+
+
+def is_kept(params: LayeredParams, plan: EffectPlan) -> bool:
+    """Whether the bake of ``params`` for ``plan`` is kept: :func:`checked_bake` returns it at once."""
+    with _lock:
+        return _key(params, plan) in _checked
+
+
+def bake_later(params: LayeredParams, plan: EffectPlan, owner: str = "") -> Future | None:
+    """Start the bake of ``params`` for ``plan`` on a worker thread (one at a time, in the order asked), its
+    result kept for :func:`checked_bake`; None where it is kept already.  An ``owner`` (a material's shader)
+    that asks for other values before its last bake has started drops that one: a slider's drag bakes the
+    value it is at when the worker is free and the last one, not every value it passed."""
+    global _worker
+    key = _key(params, plan)
+    with _lock:
+        if key in _checked:
+            return None
+        future = _running.get(key)
+        if future is None or future.cancelled():
+            if _worker is None:
+                _worker = ThreadPoolExecutor(1, thread_name_prefix="layered-brdf-bake")
+            future = _worker.submit(_bake_and_keep, key, params, plan)
+            _running[key] = future
+            future.add_done_callback(lambda f, key=key: _forget(key, f))
+        earlier = _owned.get(owner)
+        if owner and earlier is not None and earlier is not future:
+            earlier.cancel()  # only one not yet started is dropped
+        if owner:
+            _owned[owner] = future
+        return future
+
+
+def _forget(key: str, future: Future) -> None:
+    with _lock:
+        if _running.get(key) is future:
+            del _running[key]
+
+
+def bake_running(params: LayeredParams, plan: EffectPlan) -> bool:
+    """Whether a bake of ``params`` for ``plan`` started by :func:`bake_later` is running or waiting to."""
+    with _lock:
+        future = _running.get(_key(params, plan))
+        return future is not None and not future.done()
+
+
+def bakes_running() -> list[Future]:
+    """The bakes :func:`bake_later` started that are not done (running or waiting for the worker)."""
+    with _lock:
+        return [f for f in _running.values() if not f.done()]
