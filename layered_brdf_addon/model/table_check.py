@@ -216,6 +216,8 @@ def _forget(key: str, future: Future) -> None:
     with _lock:
         if _running.get(key) is future:
             del _running[key]
+        for owner in [o for o, f in _owned.items() if f is future]:
+            del _owned[owner]
 
 
 def bake_running(params: LayeredParams, plan: EffectPlan) -> bool:
