@@ -5,8 +5,9 @@ degrees: the CIEDE2000 between the add-on's colour of the stack's mirror reflect
 paper's RGB) and tmm's spectrum at 1 nm seen under D65 (layered_brdf_reference/stack_colours.py); then per
 preset and per stack size, the bake's CPU time (the process's, every thread's: a bake's points are split
 over the cores) and wall time (medians of ``--repeats``), its rows and bytes, and the tables' check against the stack computed per point (model/table_check.py: the light's L1, the share of
-highlights off by more than 2%, what passes to the base).  Prints aligned tables, markdown with
-``--markdown``.
+highlights off by more than 2%, what passes to the base); then, per disordered stack, how far the model's
+8 draws (stratified) and 8 independent ones are from the average of 1024.  Prints aligned tables, markdown
+with ``--markdown``.
 """
 from __future__ import annotations
 
@@ -18,9 +19,11 @@ import numpy as np
 
 from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.policy import plan_effects
+from layered_brdf_addon.model import stack_optics as so
 from layered_brdf_addon.model.presets import STACK_PRESETS, preset
 from layered_brdf_addon.model.table_bake import bake
 from layered_brdf_addon.model.table_check import check_tables
+from layered_brdf_reference.spectral import delta_e_2000 as rgb_delta_e
 from layered_brdf_reference.stack_colours import stack_error
 
 ANGLES = (0.0, 30.0, 60.0)
@@ -79,6 +82,43 @@ def bake_rows(repeats: int) -> list[tuple]:
     return rows
 
 
+DRAWS_REFERENCE = 1024
+
+
+def _independent_draws(stack):
+    """Independent normal draws (what the stratified ones replaced), for the table's comparison."""
+    g = np.random.default_rng(so.DISORDER_SEED).standard_normal((so.DISORDER_DRAWS, stack.count))
+    return np.maximum(1.0 + stack.disorder * g, 0.05)
+
+
+def _mirror_colour(p, draws_fn, draws: int):
+    """The stack's mirror colour at ANGLES, scale 1, as the optics give it, averaged over ``draws``."""
+    kept = so.disorder_draws, so.DISORDER_DRAWS
+    so.disorder_draws, so.DISORDER_DRAWS = draws_fn, draws
+    try:
+        r = so.StackResponse.of(p)
+        return so.stack_colour(p.stack, r.n0, r.lower_rgb, np.cos(np.radians(ANGLES)), np.ones(len(ANGLES)),
+                               "analytic", p.lower_medium, gamut=False)[0]
+    finally:
+        so.disorder_draws, so.DISORDER_DRAWS = kept
+
+
+def draws_rows() -> list[tuple]:
+    """Per disordered stack, CIEDE2000 at ANGLES of the model's 8 draws (stratified) and of 8 independent
+    ones from the average of DRAWS_REFERENCE stratified draws."""
+    cases = [("nacre (5%)", preset("nacre"))] + [(f"Bragg {n} films, disorder {round(100 * d)}%", _sized(n, d))
+                                                 for n, d in ((16, 0.05), (64, 0.05), (16, 0.2), (16, 0.4))]
+    rows = []
+    for name, p in cases:
+        reference = _mirror_colour(p, so.disorder_draws, DRAWS_REFERENCE)
+        stratified = rgb_delta_e(_mirror_colour(p, so.disorder_draws, 8), reference)
+        independent = rgb_delta_e(_mirror_colour(p, _independent_draws, 8), reference)
+        rows.append((name, " / ".join(f"{x:.2f}" for x in stratified), " / ".join(f"{x:.2f}" for x in independent)))
+    return rows
+
+
+DRAWS_HEADER = ("stack", "8 stratified draws (0 / 30 / 60°)", "8 independent draws")
+
 BAKE_HEADER = ("stack", "films", "bake (s, CPU)", "bake (s, wall)", "rows", "KiB", "L1", "highlights off", "base")
 
 
@@ -96,14 +136,18 @@ def main(argv=None) -> None:
     ap.add_argument("--markdown", action="store_true", help="print markdown tables")
     ap.add_argument("--randoms", type=int, default=6, help="random stacks in the colour table")
     ap.add_argument("--repeats", type=int, default=3, help="bakes per stack (the median's)")
-    ap.add_argument("--tables", nargs="+", choices=("colour", "bake"), default=("colour", "bake"),
-                    help="which tables to measure (default both)")
+    ap.add_argument("--tables", nargs="+", choices=("colour", "bake", "draws"), default=("colour", "bake", "draws"),
+                    help="which tables to measure (default all)")
     args = ap.parse_args(argv)
     if "colour" in args.tables:
         print(_table(COLOUR_HEADER, colour_rows(args.randoms), args.markdown))
         print()
     if "bake" in args.tables:
         print(_table(BAKE_HEADER, bake_rows(args.repeats), args.markdown))
+        print()
+    if "draws" in args.tables:
+        print(f"disorder: CIEDE2000 of the mirror colour from the average of {DRAWS_REFERENCE} draws")
+        print(_table(DRAWS_HEADER, draws_rows(), args.markdown))
 
 
 if __name__ == "__main__":
