@@ -128,3 +128,11 @@ def finish(timeout: float = RENDER_WAIT_S) -> bool:
     while _pending and time.monotonic() < deadline:
         time.sleep(POLL_S / 2)  # the main thread's timer applies them
     return not _pending
+
+
+def stop() -> None:
+    """No more looking for bakes (the add-on unregistered): the timer goes; the bakes that run finish and
+    are kept, and a later edit or render takes them."""
+    if bpy.app.timers.is_registered(poll):
+        bpy.app.timers.unregister(poll)
+    _pending.clear()

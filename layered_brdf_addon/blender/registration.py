@@ -8,7 +8,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import PointerProperty
 
-from . import assets, fit_operator, freshness, operators, properties, stack_ui, sync, ui
+from . import assets, bake_jobs, fit_operator, freshness, operators, properties, stack_ui, sync, ui
 from .stored_keys import SETTINGS
 
 CLASSES = (
@@ -136,6 +136,7 @@ def unregister() -> None:
             handlers.remove(f)
     freshness.uninstall()
     assets.cancel_queued()
+    bake_jobs.stop()
     if _other_copy() is None and hasattr(bpy.types.Material, SETTINGS):
         delattr(bpy.types.Material, SETTINGS)
     for cls in reversed(CLASSES):
