@@ -49,7 +49,7 @@ DISORDER_SEED = 20031  # their seed (the same stack, the same draws)
 MIN_COS = 1.0e-6  # the most grazing outside cosine the optics take
 CHANNEL_NM = (645.0, 525.0, 445.0)  # the paper's three wavelengths (the 'rgb' accuracy)
 
-SAMPLES_PER_SPECTRAL_FRINGE = 4  # wavelengths per fringe of the whole stack at the bluest (no aliasing)
+SAMPLES_PER_SPECTRAL_FRINGE = 8  # wavelengths per fringe of the whole stack at the bluest (no aliasing)
 FINEST_STEP_NM = 0.5
 
 
