@@ -62,14 +62,11 @@ def main(argv=None) -> int:
 
 def render(output: Path, size: int, samples: int, names, hdri_name, progress: bool) -> int:
     import bpy
-    from tqdm import tqdm
-
     from layered_brdf_addon.blender import lookdev
     from layered_brdf_addon.blender.material import apply_layered_material
     from layered_brdf_addon.blender.scene import reset_blender, view_settings_record
     from layered_brdf_addon.io.codecs import save_png
-    from layered_brdf_addon.cli.gallery import layout_for
-    from layered_brdf_addon.cli.lookdev import encode_sheet, render_tiles
+    from layered_brdf_addon.cli.lookdev import timed_sheet
     from layered_brdf_addon.io.sidecar import write_json
     from layered_brdf_addon.io.staging import StagedOutputs
     from layered_brdf_addon.model.presets import preset, preset_label
@@ -97,15 +94,7 @@ def render(output: Path, size: int, samples: int, names, hdri_name, progress: bo
                    for n in names for k in (0, 1)]
     title = (f"presets (layered, node group) | Principled BSDF + Thin Film \u00b7 {hdri.stem} HDRI + sun "
              f"\u00b7 Cycles {samples} spp \u00b7 {scene.view_settings.view_transform}")
-    # the label's last line gets the render time: lay out with room for it
-    layout = layout_for([lab + ["00.0 s"] for lab in labels_base], size, 2 * PAIRS_PER_ROW, title)
-    bar = tqdm(total=len(tiles), desc="looks", unit="tile", disable=not progress, file=sys.stderr)
-    try:
-        sheet, seconds = render_tiles(scene, layout, tiles, bar=bar)
-    finally:
-        bar.close()
-    labels = [lab + [f"{sec:.1f} s render"] for lab, sec in zip(labels_base, seconds)]
-    pixels = encode_sheet(scene, sheet, layout, labels, title)
+    pixels, seconds = timed_sheet(scene, tiles, labels_base, size, 2 * PAIRS_PER_ROW, title, "looks", progress)
     data = {"title": title, "hdri": hdri.name, "size": size, "samples": samples,
             "view": view_settings_record(scene), "bpy_version": bpy.app.version_string,
             "presets": [{"name": n, "params": preset(n).to_dict(), "principled_thin_film": equivalents[n],

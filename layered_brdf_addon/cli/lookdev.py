@@ -154,6 +154,22 @@ def encode_sheet(scene, sheet: np.ndarray, layout: GalleryLayout, labels: Sequen
     return np.asarray(compose_sheet(encode_view(sheet, scene), layout, labels, title))
 
 
+def timed_sheet(scene, tiles: Sequence[tuple[str, Callable[[], None]]], labels: Sequence[Sequence[str]],
+                size: int, columns: int, title: str, desc: str, progress: bool) -> tuple[np.ndarray, list[float]]:
+    """The labelled sheet (8-bit RGB) of ``tiles`` rendered in ``columns`` (:func:`render_tiles`), each label
+    given a last line with its tile's render time (laid out with room for it), and the tiles' render seconds."""
+    from tqdm import tqdm
+
+    layout = layout_for([list(lab) + ["00.0 s"] for lab in labels], size, columns, title)
+    bar = tqdm(total=len(tiles), desc=desc, unit="tile", disable=not progress, file=sys.stderr)
+    try:
+        sheet, seconds = render_tiles(scene, layout, tiles, bar=bar)
+    finally:
+        bar.close()
+    timed = [list(lab) + [f"{sec:.1f} s render"] for lab, sec in zip(labels, seconds)]
+    return encode_sheet(scene, sheet, layout, timed, title), seconds
+
+
 def render_lookdev(s: LookdevSettings, command: Sequence[str] | None = None, progress: bool = True,
                    log: Callable[[str], None] | None = None) -> LookdevResult:
     """Render every preset of ``s`` on the shader ball; write the labelled sheet and its sidecar."""
