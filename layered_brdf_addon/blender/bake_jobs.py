@@ -32,7 +32,7 @@ RENDER_WAIT_S = 120.0  # the longest a render waits for the bakes that run
 
 _state = {"defer": None, "waiting": 0, "refresh": None}  # defer: None follows the interface, True/False as
 # chosen (deferred()); refresh: what brings the materials up to date once a bake is done (.freshness sets it)
-_pending: list = []  # (future, owner): bakes started beside the interface, until their material took them
+_pending: list = []  # the bakes started beside the interface (futures), until the materials took them
 
 
 def _main_thread() -> bool:
@@ -79,8 +79,8 @@ def start(params: LayeredParams, plan: EffectPlan, owner: str) -> bool:
     future = table_check.bake_later(params, plan, owner)
     if future is None:
         return False
-    if all(f is not future for f, _ in _pending):
-        _pending.append((future, owner))
+    if all(f is not future for f in _pending):
+        _pending.append(future)
     if not bpy.app.timers.is_registered(poll):
         bpy.app.timers.register(poll, first_interval=POLL_S)
     return True
@@ -98,11 +98,10 @@ def baking_any() -> bool:
 def poll():
     """The timer: once a bake is done, bring the layered materials up to date (each that waited finds its
     tables kept); again in :data:`POLL_S` while bakes run, else no more."""
-    done = [(f, o) for f, o in _pending if f.done()]
+    done = [f for f in _pending if f.done()]
     if done:
-        for item in done:
-            _pending.remove(item)
-        for future, _ in done:
+        for future in done:
+            _pending.remove(future)
             if not future.cancelled() and future.exception() is not None:
                 print(f"Layered BRDF: a stack's tables could not be baked: {future.exception()}", file=sys.stderr)
         refresh = _state["refresh"]
@@ -118,7 +117,7 @@ def finish(timeout: float = RENDER_WAIT_S) -> bool:
     deadline = time.monotonic() + timeout
     if _main_thread():
         while _pending and time.monotonic() < deadline:
-            for future, _ in list(_pending):
+            for future in list(_pending):
                 try:
                     future.result(timeout=max(deadline - time.monotonic(), 0.0))
                 except Exception:  # cancelled, failed (said by poll) or out of time

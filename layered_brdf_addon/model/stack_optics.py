@@ -153,19 +153,17 @@ def _power(cell, count: int):
     return out
 
 
-def _interface(na, qa, nb, qb, back: bool = True):
+def _interface(na, qa, nb, qb):
     """Per polarisation (s, p), the amplitudes ``(r, t, r', t')`` of the boundary from a medium of index
     ``na`` (``qa = na cos``) into one of ``nb``: Fresnel's, one division each.  ``r' = -r``, ``t = 1 + r``
     and ``t' = 1 - r`` (s), ``t = (na / nb)(1 + r)`` and ``t' = (nb / na)(1 - r)`` (p, with
-    ``r = (nb^2 qa - na^2 qb) / (nb^2 qa + na^2 qb)``).  ``back=False``: ``(r_s, t_s, r_p, t_p)`` only."""
+    ``r = (nb^2 qa - na^2 qb) / (nb^2 qa + na^2 qb)``)."""
     rs = (qa - qb) / (qa + qb)
     a, b = nb * nb * qa, na * na * qb
     rp = (a - b) / (a + b)
     ratio = na / nb
     s_ = (rs, 1.0 + rs, -rs, 1.0 - rs)
     p_ = (rp, ratio * (1.0 + rp), -rp, (1.0 - rp) / ratio)
-    if not back:
-        return s_[0], s_[1], p_[0], p_[1]
     return [s_, p_]
 
 
@@ -229,7 +227,7 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths):
     for j in range(len(media) - 1):  # each pair's boundary once (a period's films repeat)
         pair = (id(media[j]), id(media[j + 1]))
         if pair not in seen:
-            rs, ts, rp, tp = _interface(media[j], qs[j], media[j + 1], qs[j + 1], back=False)
+            (rs, ts, _, _), (rp, tp, _, _) = _interface(media[j], qs[j], media[j + 1], qs[j + 1])
             seen[pair] = (np.stack(np.broadcast_arrays(rs, rp)), np.stack(np.broadcast_arrays(ts, tp)))
         bounds.append(seen[pair])
     # Where nothing absorbs, what is not reflected passes (R + T = 1): the transmitted amplitude is not summed

@@ -225,9 +225,3 @@ def bake_running(params: LayeredParams, plan: EffectPlan) -> bool:
     with _lock:
         future = _running.get(_key(params, plan))
         return future is not None and not future.done()
-
-
-def bakes_running() -> list[Future]:
-    """The bakes :func:`bake_later` started that are not done (running or waiting for the worker)."""
-    with _lock:
-        return [f for f in _running.values() if not f.done()]
