@@ -70,6 +70,10 @@ STACK_LOOKS: dict[str, Look] = {
                   luminance=(0.05, 0.3), reflects=0.2),
     "dichroic_glass": Look("clear glass that reflects bright, shifting colours", sectors=4, saturation=(0.3, 1.0),
                            reflects=0.5),
+    # A dark polished stone: the top mirrors the world, the tilted lamellae add a blue schiller (the Bragg peak of
+    # their 145-175 nm period) where they mirror a bright part of it.
+    "labradorite": Look("a dark polished stone with a blue schiller", hues=((180.0, 270.0),), hue_share=0.25,
+                        reflects=0.4, luminance=(0.0, 0.08)),
     # A clear lens shows what lies behind it: no hue or saturation of its own to hold; its look is to reflect
     # less than bare glass (tests/test_stack_looks.py compares their highlights under a sun).
     "coated_lens": Look("clear glass that reflects less than bare glass"),

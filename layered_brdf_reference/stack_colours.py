@@ -13,7 +13,8 @@ import numpy as np
 
 from layered_brdf_addon.model.media import spectrum
 from layered_brdf_addon.model.stack import FilmStack
-from layered_brdf_addon.model.stack_optics import disorder_draws, film_index, lower_index, stack_colour
+from layered_brdf_addon.model.stack_optics import (StackResponse, disorder_draws, film_index, lower_index,
+                                                   stack_colour)
 
 from . import thin_film
 from .film_colours import rgb_to_lab
@@ -51,8 +52,9 @@ def model_lab(stack: FilmStack, n0: float, lower_medium: str, lower_rgb, theta_d
 
 
 def stack_error(params, theta_deg: float, scale: float = 1.0, accuracy: str = "analytic") -> float:
-    """CIEDE2000 between the model's and tmm's colour of ``params``'s stack (a material with one)."""
-    args = (params.stack, float(params.r0), params.lower_medium, (params.r2, params.k2), theta_deg, scale)
+    """CIEDE2000 between the model's and tmm's colour of ``params``'s stack (a material with one), seen from the
+    medium above it (the outside, or the crystal around tilted lamellae: ``theta_deg`` inside it)."""
+    args = (params.stack, StackResponse.of(params).n0, params.lower_medium, (params.r2, params.k2), theta_deg, scale)
     return float(thin_film.delta_e_2000(model_lab(*args, accuracy=accuracy), reference_lab(*args)))
 
 

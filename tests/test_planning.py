@@ -33,6 +33,7 @@ EXPECTED = {
     "jewel_beetle": (True, False, "noise", "parallel", False, False),
     "morpho_blue": (True, False, "noise", "parallel", False, False),
     "nacre": (True, True, "noise", "parallel", False, False),
+    "labradorite": (True, True, "noise", "tilted", False, False),
     "dichroic_glass": (True, False, "noise", "parallel", False, False),
     "coated_lens": (True, False, "noise", "parallel", False, False),
 }

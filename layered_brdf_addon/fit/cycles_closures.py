@@ -44,6 +44,7 @@ from ..model.closure_light import (  # noqa: F401 (Cycles' closures on numpy, mo
 from ..model.params import WAVELENGTHS_NM, LayeredParams
 from ..model.plan import EffectPlan
 from ..model.policy import plan_effects
+from ..model.shading.lamella_shade import lamella_shade, response_optics
 from ..model.shading.stack_shade import stack_shade
 from ..model.stack_optics import StackResponse
 
@@ -105,9 +106,14 @@ def shade_closures(params: LayeredParams | Mapping, n0, n1, d, v, plan: EffectPl
     v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
     d = np.broadcast_to(np.asarray(d, dtype=float), shape)
     plan = plan or plan_effects(params)
-    if plan.stack:  # a film stack's one lobe, from its optics (the shaders read it from tables)
+    if plan.stack:  # a film stack's one lobe, or tilted lamellae's, from its optics (the shaders read tables)
         values = {k: v for k, v in params.to_dict().items() if isinstance(v, float)}
-        return stack_shade(ops_numpy, plan, values, ops_numpy.vec(n0), ops_numpy.vec(v), d, StackResponse.of(params))
+        response = StackResponse.of(params)
+        if plan.normals == "tilted":
+            n1 = np.broadcast_to(np.asarray(n1, dtype=float), n0.shape)
+            return lamella_shade(ops_numpy, plan, values, ops_numpy.vec(n0), ops_numpy.vec(n1), ops_numpy.vec(v), d,
+                                 *response_optics(response, d))
+        return stack_shade(ops_numpy, plan, values, ops_numpy.vec(n0), ops_numpy.vec(v), d, response)
     return program.shade(ops_numpy, program_inputs(params), ops_numpy.vec(n0), ops_numpy.vec(n1), d,
                          ops_numpy.vec(v), plan, wavelengths)
 

@@ -151,7 +151,8 @@ def candidates(pinned: Mapping[str, str] | None = None, thickness_mode: str | No
     if "stack" in layers:
         for name in STACK_PRESETS:
             p = preset(name)
-            if all(getattr(p, m) == v for m, v in pinned.items() if m in STACK_FIXED):
+            # tilted lamellae (labradorite) send their light away from the mirror direction a table holds
+            if p.normal_mode == "parallel" and all(getattr(p, m) == v for m, v in pinned.items() if m in STACK_FIXED):
                 add(name, p)
     films = [name for name in PRESETS if name not in STACK_PRESETS] if "film" in layers else []
     for name in films:  # the presets' own structures first: they claim a structure before a variant does

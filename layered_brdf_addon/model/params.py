@@ -338,13 +338,16 @@ class LayeredParams:
 
     def _check_stack(self) -> None:
         """What a film stack needs of the other settings: thin-film optics, Beckmann lobes (its tables are
-        read by both backends) and a lower boundary parallel to the top (the films' boundaries are)."""
-        needs = (("optics", "physical", "thin-film optics: a stack's films have their own indices"),
-                 ("lobe", "beckmann", "the lobe its baked tables are read with"),
-                 ("normal_mode", "parallel", "the films' boundaries lie parallel to the top"))
+        read by both backends) and a lower boundary parallel to the top (the films' boundaries are) or tilted
+        (lamellae in a crystal of the layer's index, along the lower normal)."""
+        needs = (("optics", ("physical",), "thin-film optics: a stack's films have their own indices"),
+                 ("lobe", ("beckmann",), "the lobe its baked tables are read with"),
+                 ("normal_mode", ("parallel", "tilted"), "the films lie parallel to the top, or to a tilted "
+                  "lower boundary as lamellae in a crystal"))
         for name, wanted, why in needs:
-            if getattr(self, name) != wanted:
-                raise ParameterError(name, getattr(self, name), f"'{wanted}' with a film stack ({why})")
+            if getattr(self, name) not in wanted:
+                raise ParameterError(name, getattr(self, name),
+                                     f"{' or '.join(map(repr, wanted))} with a film stack ({why})")
 
     def check_used(self, given) -> None:
         """ParameterError naming the first of ``given`` (values a user gave, by name) that this material does not

@@ -98,7 +98,7 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     animated = frozenset(animated)
     # Values the tables never hold may move (a flowing noise pattern); a tilted boundary's tables hold its tilt.
     tables = backend in BACKENDS and p.evaluation == "tables" and p.effects == "planned" and \
-        not (animated - unread_by_tables(p.normal_mode))
+        not (animated - unread_by_tables(p.normal_mode, p.stack is not None))
     if p.effects == "all":  # every effect stays, as if every socket could take any value
         animated |= {spec.name for spec in iter_sockets()}
 
@@ -143,7 +143,8 @@ def _stack_plan(p: LayeredParams, moving, thickness: str, spectral: int, analyti
     within Thickness Min and Max."""
     passes = moving("passes") or min(p.k2) < CLEAR_K
     return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
-                      thickness=thickness, normals="parallel", dispersion=False, lobe=p.lobe, spectral=spectral,
+                      thickness=thickness, normals="tilted" if p.normal_mode == "tilted" else "parallel",
+                      dispersion=False, lobe=p.lobe, spectral=spectral,
                       interference=True, analytic=analytic, optics="physical", multibeam=False, passes=passes,
                       index=p.layer_index, tables=True, stack=True)
 

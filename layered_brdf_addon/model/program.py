@@ -33,6 +33,7 @@ in :mod:`.shading`, one part per module, and every name of theirs is importable 
 * :mod:`.shading.surface_prelude`: thickness and lower normal at the shading point;
 * :mod:`.shading.inputs`: the shader's inputs, clamped;
 * :mod:`.shading.base_shader`: what reaches the Base Shader;
+* :mod:`.shading.stack_shade`, :mod:`.shading.lamella_shade`: a stack of films, parallel or tilted lamellae;
 * :mod:`.shading.tables`: the closures read from a material's baked tables.
 """
 from __future__ import annotations
@@ -51,6 +52,7 @@ from .shading.lobes import (ANISO_FLOOR, INV_2PI, MIN_COS, angle2, beckmann_lamb
                             glossy_alphas, lobe_alphas, lobe_peak, lobe_shape)
 from .shading.placement import exit_direction, interference_centre, layer_path, lobe_geometry
 from .shading.spectral_mode import merged_group_weights, shade_spectral, spectral_groups, spectral_step
+from .shading.lamella_shade import lamella_shade, response_optics, tabulated_lamellae
 from .shading.stack_shade import stack_shade
 from .shading.step import shader_function
 from .shading.tables import TableLayout, tabulated_shade
@@ -76,7 +78,8 @@ __all__ = [
     "pattern_thickness", "tangent_axis", "thickness_at", "thickness_factor", "thickness_gradient",
     "tilt_axis", "tilt_axis_about", "tilted_normal",
     "FLOAT_LIMIT", "clamped_inputs", "direction_input", "program_inputs", "CLEAR_K", "base_weight",
-    "base_transmittance", "passed_at", "passed_to_base", "TableLayout", "tabulated_shade", "shade", "layered_surface",
+    "base_transmittance", "passed_at", "passed_to_base", "TableLayout", "tabulated_shade", "lamella_shade",
+    "tabulated_lamellae", "stack_shade", "shade", "layered_surface",
     "surface_geometry",
 ]
 
@@ -169,7 +172,12 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None, *,
     ``transmittance`` (what reaches the base per channel: the colour of a clear base's Transparent BSDF).
     """
     P, n0, v, p_obj, pattern, d, axis, n1 = surface_geometry(ops, plan, thickness=thickness, lower=lower, axis=axis)
-    if plan.tables:
+    lamellae = plan.stack and plan.normals == "tilted"
+    if plan.tables and lamellae:
+        with ops.stage("Tilted lamellae in a crystal: the top's gloss, the schiller through the top, the lamellae's "
+                       "optics read from the material's baked tables (the cosine to the lamellae, d)"):
+            res = tabulated_lamellae(ops, plan, layout, P, n0, n1, v, d)
+    elif plan.tables:
         with ops.stage("Lobes and interference from the material's baked tables: the view's angle, d "
                        "(and the view's azimuth from the lower normal)"):
             res = tabulated_shade(ops, plan, layout, P, n0, v, d, axis)
@@ -177,8 +185,12 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None, *,
         if stack is None:
             raise ValueError(f"plan {plan.key}: a film stack's closures are computed from its optics on numpy "
                              "(stack=StackResponse); the shaders read them from its tables")
-        with ops.stage("A stack of films: its reflectance in one lobe, what it passes to the base"):
-            res = stack_shade(ops, plan, P, n0, v, d, stack)
+        if lamellae:
+            with ops.stage("Tilted lamellae in a crystal: the top's gloss, the schiller through the top"):
+                res = lamella_shade(ops, plan, P, n0, n1, v, d, *response_optics(stack, d))
+        else:
+            with ops.stage("A stack of films: its reflectance in one lobe, what it passes to the base"):
+                res = stack_shade(ops, plan, P, n0, v, d, stack)
     else:
         with ops.stage("Lobes and interference: eqs. 3-11 (specular), 14-18 (diffuse)"):
             inputs = program_inputs(P)

@@ -403,8 +403,10 @@ class StackResponse:
 
     @classmethod
     def of(cls, params) -> "StackResponse":
-        """The response of ``params``'s stack (a :class:`~.params.LayeredParams` with one)."""
-        return cls(params.stack, float(params.r0), (tuple(params.r2), tuple(params.k2)), params.lower_medium,
+        """The response of ``params``'s stack (a :class:`~.params.LayeredParams` with one): under the outside, or
+        tilted lamellae in a crystal of the layer's index (:mod:`.shading.lamella_shade`)."""
+        above = params.r1[1] if params.normal_mode == "tilted" else params.r0
+        return cls(params.stack, float(above), (tuple(params.r2), tuple(params.k2)), params.lower_medium,
                    params.accuracy)
 
     def scale(self, d):

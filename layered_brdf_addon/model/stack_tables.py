@@ -11,7 +11,7 @@ Rows along the thickness: :data:`.table_grid.SAMPLES_PER_FRINGE` per fringe of t
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,6 +20,7 @@ from .ops_numpy import ShadingPoint
 from .params import LayeredParams
 from .plan import EffectPlan
 from .shading.inputs import clamped_inputs
+from .shading.lamella_shade import LAMELLA_IMAGES
 from .shading.stack_shade import stack_shade
 from .shading.tables import COS_SAMPLES, TableLayout
 from .stack_optics import ANGLE_NODES, NodeResponse, StackResponse, coherent_optical
@@ -47,28 +48,71 @@ def stack_rows(params: LayeredParams, plan: EffectPlan, row: TableLayout) -> int
     return int(min(wanted, most))
 
 
+# Texels along the square root of the cosine to tilted lamellae: their Bragg peak moves through a channel's band
+# as that cosine changes by a few hundredths (labradorite: 64 texels left 7% of its schiller's highlights off by
+# more than 2%, 128 none; docs/stacks.md).
+LAMELLA_COS_SAMPLES = 128
+
+
+@dataclass(frozen=True)
+class LamellaLayout(TableLayout):
+    """The tables of tilted lamellae (:mod:`.shading.lamella_shade`): not closures but the lamellae's optics,
+    one image each of :data:`.shading.lamella_shade.LAMELLA_IMAGES` (RGB; alpha unused), over the square root of
+    the cosine to the lamellae and the thickness; ``leaving`` (where the plan has a diffuse part) adds what they
+    pass averaged over the hemisphere, every column of a row alike."""
+
+    leaving: bool = False
+
+    @property
+    def images(self) -> int:
+        return len(LAMELLA_IMAGES) if self.leaving else len(LAMELLA_IMAGES) - 1
+
+
 def stack_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
-    """The layout of a stack's tables: the reflected lobe (every channel) where the plan is specular."""
-    closures = (("reflect", (0, 1, 2)),) if plan.specular else ()
-    row = TableLayout(closures, COS_SAMPLES, 1, 1, (), _place(plan))
+    """The layout of a stack's tables: the reflected lobe (every channel) where the plan is specular; tilted
+    lamellae's optics (:class:`LamellaLayout`)."""
+    if plan.normals == "tilted":
+        row = LamellaLayout((), LAMELLA_COS_SAMPLES, 1, leaving=plan.diffuse)
+    else:
+        closures = (("reflect", (0, 1, 2)),) if plan.specular else ()
+        row = TableLayout(closures, COS_SAMPLES, 1, 1, (), _place(plan))
     return replace(row, height=stack_rows(params, plan, row))
+
+
+def _texel_points(params: LayeredParams, plan: EffectPlan, layout: TableLayout):
+    """The shading points of the texels of ``layout`` (n0 = +z), their inputs, views and thicknesses, and the
+    stack's response there (a disordered stack's draws cost their films each: the optics at fewer angles,
+    joined by cubics)."""
+    values = table_grid.held_values(params, ShadingPoint.SOCKETS)
+    n0 = np.zeros((1, layout.height, layout.width, 3))
+    n0[..., 2] = 1.0
+    pt = ShadingPoint(values, n0, n0, np.zeros_like(n0))
+    P = clamped_inputs(pt, replace(plan, tables=False))
+    v, d, _ = table_grid.texel_grid(layout.width, layout.height, float(P["d_min"]), float(P["d_max"]))
+    response = StackResponse.of(params)
+    if params.stack.disorder:
+        response = NodeResponse(response, d[0, :, 0], ANGLE_NODES)
+    return pt, P, n0, v, d, response
 
 
 def stack_grid(params: LayeredParams, plan: EffectPlan, layout: TableLayout):
     """The stack's closures at the texels of ``layout`` (as :func:`.table_bake._shade_grid` gives a film's),
     what passes to the base, and no frame (the closures lie about ``n0``)."""
-    values = table_grid.held_values(params, ShadingPoint.SOCKETS)
-    n0 = np.zeros((1, layout.height, layout.width, 3))
-    n0[..., 2] = 1.0
-    pt = ShadingPoint(values, n0, n0, np.zeros_like(n0))
-    plan = replace(plan, tables=False)
-    P = clamped_inputs(pt, plan)
-    v, d, _ = table_grid.texel_grid(layout.width, layout.height, float(P["d_min"]), float(P["d_max"]))
-    response = StackResponse.of(params)
-    if params.stack.disorder:  # its draws cost their films each: the optics at fewer angles, joined by cubics
-        response = NodeResponse(response, d[0, :, 0], ANGLE_NODES)
-    res = stack_shade(pt, plan, P, ops_numpy.vec(n0), ops_numpy.vec(v), d, response)
+    pt, P, n0, v, d, response = _texel_points(params, plan, layout)
+    res = stack_shade(pt, replace(plan, tables=False), P, ops_numpy.vec(n0), ops_numpy.vec(v), d, response)
     return res, (res.extras["base_weight"], res.extras["transmittance"]), None
+
+
+def lamella_texels(params: LayeredParams, plan: EffectPlan, layout: LamellaLayout) -> np.ndarray:
+    """Tilted lamellae's tables (float32, images x H x W x RGBA): what they reflect and pass at the texels'
+    cosines to their normal (the crystal above them), and with ``layout.leaving`` their hemispherical mean."""
+    _, _, _, v, d, response = _texel_points(params, plan, layout)
+    out = np.zeros((layout.images, layout.height, layout.width, 4), dtype=np.float32)
+    R, T = response.colour(v[0, ..., 2], d[0])
+    out[0, ..., :3], out[1, ..., :3] = R, T
+    if layout.leaving:
+        out[2, ..., :3] = response.hemispherical(d[0, :, 0])[1][:, None, :]
+    return out
 
 
 def stack_record(params: LayeredParams) -> dict:

@@ -20,7 +20,7 @@ from .table_grid import (MAX_TABLE_BYTES, MAX_THICKNESS_SAMPLES, MIN_THICKNESS_S
 from .ops_numpy import ShadingPoint
 from .params import WAVELENGTHS_NM, LayeredParams
 from .plan import EffectPlan
-from .program import shade, tabulated_shade
+from .program import shade, tabulated_lamellae, tabulated_shade
 from .shading.base_shader import base_receives_light, passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
 from .shading.surface_prelude import tilted_normal
@@ -149,6 +149,8 @@ def bake(params: LayeredParams, plan: EffectPlan) -> tuple[TableLayout, np.ndarr
     """``params``'s tables for ``plan``: the layout, and the texels as float32 (images, H, image_width, 4),
     a tilted boundary's azimuth slices side by side, each with its edge columns repeated."""
     layout = table_layout(params, plan)
+    if plan.stack and plan.normals == "tilted":
+        return layout, stack_tables.lamella_texels(params, plan, layout)
     if plan.stack:
         res, (base, transmittance), frame = stack_tables.stack_grid(params, plan, layout)
     else:
@@ -245,7 +247,7 @@ def spline_coefficients(texels: np.ndarray, layout: TableLayout | None = None) -
 def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
     """What the tables of ``params`` for ``plan`` depend on, as a short digest: the table format, the
     plan, and every value the tables hold (not the pattern's, :func:`.shading.tables.unread_by_tables`)."""
-    unread = unread_by_tables(plan.normals)
+    unread = unread_by_tables(plan.normals, plan.stack)
     values = {k: v for k, v in held_values(params, "nodes", plan).items() if k not in unread}
     samples = [COS_SAMPLES, SAMPLES_PER_FRINGE] + \
         ([AZIMUTH_SAMPLES, ANGLE_SAMPLES] if plan.normals == "tilted" else [])
@@ -260,7 +262,8 @@ def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
 def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayout, texels: np.ndarray, n0, v, d,
                      axis=None):
     """What the group reading these tables returns at points of upper normal ``n0``, view ``v``, thickness
-    ``d`` and tilt axis ``axis`` (numpy arrays; ``axis`` where the layout is sliced: unit, across ``n0``,
+    ``d`` and tilt axis ``axis`` (numpy arrays; ``axis`` where the layout is sliced or the plan's lamellae are
+    tilted: unit, across ``n0``,
     :func:`.shading.surface_prelude.tilt_axis`): the program's tabulated
     step on numpy, reading ``texels`` (a bake's) as Cycles' Image Texture reads the images the group holds
     (:func:`spline_coefficients`, :func:`.ops_numpy.table_lookup`)."""
@@ -269,5 +272,9 @@ def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayou
                       tables=spline_coefficients(texels, layout))
     P = clamped_inputs(pt, plan)
     t = None if axis is None else ops_numpy.vec(np.asarray(axis, dtype=float))
+    if plan.stack and plan.normals == "tilted":
+        n1 = tilted_normal(pt, pt.shading_normal(), t, float(P["tilt"]))
+        return tabulated_lamellae(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), n1, pt.incoming(),
+                                  np.asarray(d, dtype=float))
     return tabulated_shade(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), pt.incoming(),
                            np.asarray(d, dtype=float), t)

@@ -109,13 +109,17 @@ def check_tables(params: LayeredParams, plan: EffectPlan, layout, texels, points
     stack = StackResponse.of(params) if plan.stack else None
     computed = layered_surface(pt, replace(plan, tables=False), thickness=d, lower=vec(n1), axis=vec(axes),
                                stack=stack)
-    tabulated = tabulated_result(params, plan, layout, texels, n0, v, d, axes if layout.sliced else None)
+    tabulated = tabulated_result(params, plan, layout, texels, n0, v, d, axes if plan.normals == "tilted" else None)
     a = evaluate_closures(computed, n0, v, light, plan.lobe)
     b = evaluate_closures(tabulated, n0, v, light, plan.lobe)
     total = float(np.abs(a).sum())
     l1 = float(np.abs(a - b).sum()) / total if total > 0.0 else 0.0
-    # At each probe's highlight (the light at the view's mirror direction), as bright as the lobes get there.
-    mirror = 2.0 * np.sum(n0 * v, axis=-1, keepdims=True) * n0 - v
+    # At each probe's highlight (the light at the view's mirror direction), as bright as the lobes get there;
+    # tilted lamellae's, where the tables are read, is their schiller's (the view mirrored about its normal).
+    about = n0
+    if plan.stack and plan.normals == "tilted" and plan.specular:
+        about = np.broadcast_to(np.asarray(computed.glossy[-1].normal, dtype=float), n0.shape)
+    mirror = 2.0 * np.sum(about * v, axis=-1, keepdims=True) * about - v
     am = evaluate_closures(computed, n0, v, mirror, plan.lobe)
     bm = evaluate_closures(tabulated, n0, v, mirror, plan.lobe)
     peak = np.maximum(am.max(axis=-1), DARK * max(float(am.max()), 1e-30))

@@ -43,6 +43,7 @@ def channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, lobe="beckmann", interference=
     geo = lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v)
     out = {k: geo[k] for k in LOBE_PLACEMENT}
     out["cos_v"] = cos_v
+    out["to_lower"] = geo["to_lower"]  # <t_o, n1>: the refracted view's cosine to the lower normal, negative
     if interference:
         out.update(fold_basis(ops, e0, geo["eT"], geo["eI"], geo["d_RT"], geo["d_RI"], geo["d_TI"]))
     n = 3 if ops.is_vector(r1) else 1

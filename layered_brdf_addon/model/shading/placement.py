@@ -114,7 +114,7 @@ def lobe_geometry(ops, r1, e0, e1, r0, n0, n1, v, cos_v, r_v):
     atten = ops.exp(e01 * d_RT * (-0.25) / w_sum)
     cos_ci, d_RI, d_TI = interference_centre(ops, e0, e1p, w_sum, e01, d_RT, cos_v,
                                              ops.select(through, cos_ls, cos_v))
-    out = dict(through=through, tail=tail, cos_ls=cos_ls, cos_ci=cos_ci, atten=atten, eT=e1p,
+    out = dict(through=through, tail=tail, cos_ls=cos_ls, cos_ci=cos_ci, atten=atten, eT=e1p, to_lower=to_n1,
                eI=0.5 * (e0 + e1p), d_RT=d_RT, d_RI=d_RI, d_TI=d_TI, eT_within=e1_within, eT_across=e1_across)
     for k, ls in enumerate(l_stars):
         out[f"l_star{k}"] = ls

@@ -61,10 +61,11 @@ UNREAD_BY_TABLES = frozenset({"noise_scale", "noise_detail", "noise_roughness", 
                               "tilt_azimuth", "bump_strength"})
 
 
-def unread_by_tables(normals: str) -> frozenset:
+def unread_by_tables(normals: str, stack: bool = False) -> frozenset:
     """:data:`UNREAD_BY_TABLES` for a lower boundary of mode ``normals``: a tilted boundary's tables hold
-    its tilt (not the tilt's azimuth, which turns the lower normal about ``n0`` point by point)."""
-    return UNREAD_BY_TABLES - {"tilt"} if normals == "tilted" else UNREAD_BY_TABLES
+    its tilt (not the tilt's azimuth, which turns the lower normal about ``n0`` point by point); tilted
+    lamellae's (a ``stack``'s) do not: the shader follows their normal per point (:mod:`.lamella_shade`)."""
+    return UNREAD_BY_TABLES - {"tilt"} if normals == "tilted" and not stack else UNREAD_BY_TABLES
 
 
 class NotTabulable(ValueError):
@@ -75,8 +76,9 @@ def tabulable(plan: EffectPlan, backend: str = "nodes") -> bool:
     """Whether the closures of ``plan`` can be baked: a lower boundary parallel (every closure about
     ``n0``) or, in the node group, tilted by a constant angle (the closures' normals baked too); a
     thickness from the material's pattern or a constant (a linked thickness has no known range);
-    Beckmann lobes (the node group's).  The OSL shader reads tables of parallel boundaries only."""
-    normals = ("parallel", "tilted") if backend == "nodes" else ("parallel",)
+    Beckmann lobes (the node group's).  The OSL shader reads tables of parallel boundaries only, and a
+    stack's tilted lamellae (their tables are not sliced: :mod:`.lamella_shade`)."""
+    normals = ("parallel", "tilted") if backend == "nodes" or plan.stack else ("parallel",)
     return plan.normals in normals and plan.thickness in ("noise", "height", "constant") and \
         plan.lobe == "beckmann"
 
@@ -176,15 +178,27 @@ def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
     """The lookup's image coordinates at the shading point: the view's angle along x (``sqrt(cos_v)``, or
     ``theta_v`` when sliced, in the first slice), the thickness's place in ``[d_min, d_max]`` along y (the
     sockets' range, so a link's thickness is read where it lies), each mapped onto the texels' centres."""
-    w, h = layout.width, layout.height
+    w = layout.width
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     if layout.sliced:
         # The view's angle from n0, linearly: a tilted boundary's closures turn with the view about n0, so
         # near normal view they vary with the angle, not its cosine.
         along = 1.0 - ops.atan2(ops.length(v - n0 * ops.dot(v, n0)), cos_v) * (2.0 / math.pi)
         x = ops.madd(along, (w - 1.0) / layout.image_width, 1.5 / layout.image_width)
-    else:
-        x = ops.madd(ops.sqrt(cos_v), (w - 1.0) / w, 0.5 / w)
+        return _with_thickness(ops, layout, P, x, d)
+    return texel_coordinates(ops, layout, P, ops.sqrt(cos_v), d)
+
+
+def texel_coordinates(ops, layout: TableLayout, P, root, d):
+    """The image coordinates of an unsliced table at ``root`` (the square root of the cosine its columns run
+    along: the view's, or a tilted stack's cosine to its lamellae) and thickness ``d``, on the texels' centres."""
+    w = layout.width
+    x = (w - 1.0) / w * root + 0.5 / w if isinstance(root, float) else ops.madd(root, (w - 1.0) / w, 0.5 / w)
+    return _with_thickness(ops, layout, P, x, d)
+
+
+def _with_thickness(ops, layout: TableLayout, P, x, d):
+    h = layout.height
     if h == 1:
         return ops.combine(x, 0.5, 0.0)
     t = (d - P["d_min"]) / (P["d_max"] - P["d_min"])
