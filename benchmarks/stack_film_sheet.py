@@ -34,11 +34,15 @@ FILM_FIELDS = ("optics", "layer_index", "layer_ior", "layer_dispersion", "r1_r",
 
 def closest_film(name: str, folder: Path):
     """``(film params, fit record)``: the preset ``name`` with its stack replaced by the one film the fit finds
-    closest to the stack's mirror colours (the fit's figure and record written in ``folder``)."""
+    closest to the stack's mirror colours (the fit's figure and record written in ``folder``); tilted lamellae's
+    by one lamella in their crystal (``stack_vs_film.closest_lamella``)."""
     from layered_brdf_addon.cli import commands as cli
     from layered_brdf_addon.model.params import LayeredParams
     from layered_brdf_addon.model.presets import preset
-    from stack_vs_film import write_table
+    from stack_vs_film import closest_lamella, write_table
+
+    if preset(name).normal_mode == "tilted":
+        return closest_lamella(name)
 
     table = folder / f"{name}.csv"
     write_table(name, table)
@@ -57,6 +61,9 @@ def closest_film(name: str, folder: Path):
 
 
 def film_label(p) -> str:
+    if p.stack is not None:  # one lamella in the crystal
+        film = p.stack.films[0]
+        return f"one lamella \u00b7 n {film.ior:.2f} \u00b7 {film.thickness_nm:.0f} nm \u00b7 in n {p.r1_g:.3f}"
     lower = p.lower_medium if p.lower_medium != "custom" else f"n {p.r2_g:.2f}"
     return f"n {p.r1_g:.2f} \u00b7 {0.5 * (p.d_min + p.d_max):.0f} nm \u00b7 over {lower} \u00b7 {p.optics} optics"
 
@@ -105,7 +112,12 @@ def render(output: Path, size: int, samples: int, hdri_name: str, progress: bool
     tiles, labels_base, equivalents = [], [], {}
     for name in STACK_PRESETS:
         stack, film = preset(name), films[name]
-        kw = lookdev.thin_film_equivalent(name, film)
+        surface = film
+        if film.stack is not None:  # Principled's film lies on the surface: the lamella's index and thickness there
+            lamella = film.stack.films[0]
+            surface = film.replace(stack=None, normal_mode="parallel", layer_index="ior", layer_ior=lamella.ior,
+                                   layer_dispersion=0.0)
+        kw = lookdev.thin_film_equivalent(name, surface)
         if film.base_layer == "none" and not kw["metallic"]:  # what diffuses under the film: kd of the base
             kw["base_color"] = tuple(film.kd * c for c in film.base_color)
         equivalents[name] = kw

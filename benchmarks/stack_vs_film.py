@@ -4,7 +4,10 @@ For every structural preset, the stack's mirror reflectance spectrum at 0, 30 an
 averaged over the model's draws) is written as a reflectance table and fitted by ``layered-brdf fit
 --reflectance`` with no start (the fit chooses among its films' structures: every film preset's, with each
 lower medium and boundary); the table prints the closest single film's mean CIEDE2000 from the stack and
-what that film is.  ``--sheets DIR`` keeps each fit's figure (target, fit, curves).
+what that film is.  ``--sheets DIR`` keeps each fit's figure (target, fit, curves).  Tilted lamellae
+(labradorite) reflect inside their crystal, away from its top's mirror direction: their closest one film is
+the crystal's with one lamella, its index (1.3-2.5) and thickness (20-600 nm) the scan's nearest to the
+lamellae's colours at those angles inside the crystal (:func:`closest_lamella`).
 """
 from __future__ import annotations
 
@@ -18,7 +21,8 @@ import numpy as np
 
 from layered_brdf_addon.cli import commands as cli
 from layered_brdf_addon.model.presets import STACK_PRESETS, preset
-from layered_brdf_addon.model.stack_optics import disorder_draws, lower_index, stack_spectra
+from layered_brdf_addon.model.stack_optics import StackResponse, disorder_draws, lower_index, stack_spectra
+from layered_brdf_reference.spectral import delta_e_2000 as rgb_delta_e
 
 ANGLES = (0.0, 30.0, 60.0)
 WAVES = np.arange(380.0, 781.0, 5.0)
@@ -39,6 +43,33 @@ def write_table(name: str, path: Path) -> None:
             out.writerows([angle, lam, f"{r:.6f}"] for lam, r in zip(WAVES, R))
 
 
+LAMELLA_IORS = np.arange(1.30, 2.501, 0.02)
+LAMELLA_NM = np.arange(20.0, 601.0, 2.0)
+
+
+def closest_lamella(name: str):
+    """``(params, record)``: tilted lamellae's preset with its stack replaced by the one lamella whose colours at
+    ANGLES inside the crystal are nearest the stack's (mean CIEDE2000, ``record["mean_delta_e_2000"]``); its
+    thickness range the preset's relative spread about the lamella's thickness."""
+    p = preset(name)
+    cos = np.cos(np.radians(ANGLES))[:, None]
+    target = StackResponse.of(p).colour(cos, p.stack.total_nm)[0][:, 0]  # (angles, 3)
+    best = (np.inf, None, None)
+    for ior in LAMELLA_IORS:
+        one = p.replace(stack={"kind": "list", "films": [{"ior": round(float(ior), 3), "thickness_nm": 100.0}]})
+        R = StackResponse.of(one).colour(cos, LAMELLA_NM[None, :])[0]  # (angles, thicknesses, 3)
+        errors = np.mean([rgb_delta_e(R[a], np.broadcast_to(target[a], R[a].shape)) for a in range(len(ANGLES))],
+                         axis=0)
+        k = int(np.argmin(errors))
+        if errors[k] < best[0]:
+            best = (float(errors[k]), round(float(ior), 3), float(LAMELLA_NM[k]))
+    error, ior, nm = best
+    middle = 0.5 * (p.d_min + p.d_max)
+    film = p.replace(stack={"kind": "list", "films": [{"ior": ior, "thickness_nm": nm}]},
+                     d_min=round(nm * p.d_min / middle, 1), d_max=round(nm * p.d_max / middle, 1))
+    return film, {"mean_delta_e_2000": error, "lamella_ior": ior, "lamella_nm": nm}
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sheets", type=Path, help="a folder for each fit's figure")
@@ -47,6 +78,11 @@ def main(argv=None) -> None:
     print("|---|---|---:|")
     with tempfile.TemporaryDirectory() as tmp:
         for name in STACK_PRESETS:
+            if preset(name).normal_mode == "tilted":
+                _, fit = closest_lamella(name)
+                print(f"| {name} | one lamella in the crystal, n {fit['lamella_ior']:.2f}, {fit['lamella_nm']:.0f} nm | "
+                      f"{fit['mean_delta_e_2000']:.2f} |")
+                continue
             table = Path(tmp) / f"{name}.csv"
             write_table(name, table)
             stem = (args.sheets or Path(tmp)) / f"stack-vs-film-{name.replace('_', '-')}"

@@ -71,7 +71,8 @@ STACK_LOOKS: dict[str, Look] = {
     "dichroic_glass": Look("clear glass that reflects bright, shifting colours", sectors=4, saturation=(0.3, 1.0),
                            reflects=0.5),
     # A dark polished stone: the top mirrors the world, the tilted lamellae add a blue schiller (the Bragg peak of
-    # their 145-175 nm period) where they mirror a bright part of it.
+    # their 145-175 nm period) where they mirror a bright part of it.  Measured: blue 0.28 (courtyard, whose warm
+    # walls the top mirrors) to 0.73 (sunset) of the coloured pixels, luminance 0.02-0.04, mirror 0.50-0.66.
     "labradorite": Look("a dark polished stone with a blue schiller", hues=((180.0, 270.0),), hue_share=0.25,
                         reflects=0.4, luminance=(0.0, 0.08)),
     # A clear lens shows what lies behind it: no hue or saturation of its own to hold; its look is to reflect

@@ -4,7 +4,9 @@ The reference is tmm's coherent transfer matrices (``tmm.coh_tmm``, both polaris
 air | films | lower medium at 1 nm over 380-780 nm, seen under D65 with the CIE 1931 observer
 (:mod:`.thin_film`); a disordered stack is averaged over the same draws of its films' thicknesses
 (:func:`layered_brdf_addon.model.stack_optics.disorder_draws`), so that the comparison measures the
-optics and their colour, not two samplings of the disorder.  The model side is
+optics and their colour, not two samplings of the disorder.  A stack's domains (coherent copies one under
+the other, their light added as power) are tmm's coherent domain per polarisation, piled one domain at a
+time as a pile of plates adds its light (Stokes).  The model side is
 :func:`layered_brdf_addon.model.stack_optics.stack_colour` (linear Rec.709, out of gamut kept).
 """
 from __future__ import annotations
@@ -29,9 +31,36 @@ def tmm_spectrum(stack: FilmStack, n0: float, lower, theta_deg: float, scale: fl
     lams = np.asarray(wavelengths, dtype=float)
     indices = {f: film_index(f, lams) for f in stack.films}
     draws = disorder_draws(stack) if stack.disorder else np.ones((1, stack.count))
+    if stack.domains > 1:
+        return tuple(np.mean([_domains(stack, n0, [indices[f] for f in stack.layers], [
+            scale * f.thickness_nm * x for f, x in zip(stack.layers, factors)], lower, theta_deg, lams)
+            for factors in draws], axis=0))
     R, T = np.mean([thin_film.stack_reflectance_transmittance(
         n0, [indices[f] for f in stack.layers], [scale * f.thickness_nm * x for f, x in zip(stack.layers, factors)],
         lower, theta_deg, lams) for factors in draws], axis=0)
+    return R, T
+
+
+def _domains(stack: FilmStack, n0: float, films, thicknesses, lower, theta_deg: float, lams):
+    """Unpolarised ``(R, T)`` of ``stack.domains`` copies of the films in the medium ``n0``, the last over
+    ``lower``: per polarisation, tmm's coherent domain (with ``n0`` below it, and with ``lower``), the domains
+    added one at a time from the bottom up, the light between them summed as powers."""
+    import tmm
+
+    theta = np.radians(theta_deg)
+    d = [np.inf, *thicknesses, np.inf]
+    R, T = np.zeros(lams.size), np.zeros(lams.size)
+    for i, lam in enumerate(lams):
+        for pol in "sp":
+            def coherent(below):
+                out = tmm.coh_tmm(pol, [n0, *(n[i] for n in films), below], d, theta, lam)
+                return out["R"], out["T"]
+            (Rd, Td), (Rb, Tb) = coherent(n0), coherent(lower[i])
+            for _ in range(stack.domains - 1):  # one more domain on top of what lies below
+                inv = 1.0 / (1.0 - Rd * Rb)
+                Rb, Tb = Rd + Td * Td * Rb * inv, Td * Tb * inv
+            R[i] += 0.5 * Rb
+            T[i] += 0.5 * Tb
     return R, T
 
 

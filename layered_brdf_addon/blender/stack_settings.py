@@ -1,5 +1,5 @@
 """A material's film stack as its settings hold it: the panel's stack editor (a list of films, the number
-of periods, the disorder) and the stack of the parameters (:class:`~..model.stack.FilmStack`).
+of periods, the disorder, the domains) and the stack of the parameters (:class:`~..model.stack.FilmStack`).
 
 The settings property group (:mod:`.properties`) gets :func:`stack_annotations` and the ``stack``
 property (:func:`stack_from_settings`, :func:`write_stack`), so that reading and writing a material's
@@ -11,7 +11,7 @@ from bpy.props import BoolProperty, CollectionProperty, EnumProperty, FloatPrope
 from bpy.types import PropertyGroup
 
 from ..model.media import MEDIA
-from ..model.stack import MAX_DISORDER, MAX_FILM_NM, MAX_FILMS, MAX_K, STACK_KINDS, FilmStack
+from ..model.stack import MAX_DISORDER, MAX_DOMAINS, MAX_FILM_NM, MAX_FILMS, MAX_K, STACK_KINDS, FilmStack
 
 INDEX_ITEM = "ior"  # a film given by its IOR, Dispersion and k instead of a named medium
 MEDIUM_ITEMS = ((INDEX_ITEM, "IOR", "The film's index given by its IOR, Dispersion and extinction k"),) + tuple(
@@ -53,6 +53,10 @@ def stack_annotations(update, film_class) -> dict:
                                         max=MAX_DISORDER,
                                         description="Spread of the films' thicknesses across periods (standard "
                                         "deviation over mean): softer, broader colours"),
+        "stack_domains": IntProperty(name="Domains", default=1, min=1, max=MAX_DOMAINS, soft_max=256, update=update,
+                                     description="Tilted lamellae in a crystal: how many domains of the stack lie one "
+                                     "under the other, their light adding as power (a stone's many lamellae); 1 "
+                                     "with a parallel lower boundary"),
         "stack_films": CollectionProperty(type=film_class, name="Films"),
         "stack_index": IntProperty(name="Active Film", default=0, min=0),
     }
@@ -71,7 +75,7 @@ def stack_from_settings(st) -> FilmStack | None:
         return None
     periods = st.stack_periods if st.stack_kind == "periodic" else 1
     return FilmStack.from_dict({"kind": st.stack_kind, "films": [_film_dict(f) for f in st.stack_films],
-                                "periods": periods, "disorder": st.stack_disorder})
+                                "periods": periods, "disorder": st.stack_disorder, "domains": st.stack_domains})
 
 
 def write_stack(st, stack: FilmStack | None) -> None:
@@ -92,6 +96,7 @@ def write_stack(st, stack: FilmStack | None) -> None:
     st.stack_kind = stack.kind
     st.stack_periods = stack.periods
     st.stack_disorder = stack.disorder
+    st.stack_domains = stack.domains
     st.stack_index = min(st.stack_index, len(stack.films) - 1)
     st.use_stack = True
 

@@ -132,6 +132,7 @@ def draw_stack(layout, mat) -> None:
     if st.stack_kind == "periodic":
         col.prop(st, "stack_periods")
     col.prop(st, "stack_disorder")
+    col.prop(st, "stack_domains")
     row = col.row()
     row.template_list(LAYERED_BRDF_UL_stack_films.__name__, "", st, "stack_films", st, "stack_index", rows=4)
     buttons = row.column(align=True)
@@ -156,8 +157,13 @@ def draw_stack(layout, mat) -> None:
         col.label(text=f"Thickness Min / Max scale the stack by {low / stack.total_nm:.2f} - "
                        f"{high / stack.total_nm:.2f}", icon="DOT")
     col.operator(LAYERED_BRDF_OT_stack_thickness.bl_idname, icon="MOD_THICKNESS")
-    if bake_jobs.baking_any() and material_problem(mat) is None:
-        params, _, plan = desired(mat)
+    if material_problem(mat) is not None:
+        return
+    params, _, plan = desired(mat)
+    if params.normal_mode == "tilted":
+        col.label(text=f"Lamellae along the lower normal (Tilt {params.tilt:g}\u00b0) in a crystal of IOR "
+                       f"{params.r1[1]:.3f}: its gloss, their schiller", icon="DOT")
+    if bake_jobs.baking_any():
         if bake_jobs.baking(params, plan):
             col.label(text="Baking the stack's tables: the look follows when they are done", icon="TIME")
 

@@ -348,6 +348,9 @@ class LayeredParams:
             if getattr(self, name) not in wanted:
                 raise ParameterError(name, getattr(self, name),
                                      f"{' or '.join(map(repr, wanted))} with a film stack ({why})")
+        if self.stack.domains > 1 and self.normal_mode != "tilted":
+            raise ParameterError("stack.domains", self.stack.domains, "1 unless Lower normal is 'tilted' (domains "
+                                 "lie one under the other in the crystal around tilted lamellae)")
 
     def check_used(self, given) -> None:
         """ParameterError naming the first of ``given`` (values a user gave, by name) that this material does not

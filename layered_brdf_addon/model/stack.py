@@ -11,6 +11,10 @@ medium (``r0``) and the material's lower medium (``r2``, ``k2`` or a named one).
 the mean): a beetle's or a shell's layers are never all alike.  The optics average the
 reflectance over stacks drawn with that spread (:mod:`.stack_optics`).
 
+``domains``: tilted lamellae in a crystal (labradorite) keep their order over a domain of the stack's
+films, and a stone holds many domains one under the other, apart by more than light's coherence: their
+light adds as power, not as waves (:mod:`.incoherent`).  1: the stack is one coherent domain.
+
 The material's thickness (its Thickness Min / Max, its pattern or its Thickness input) is the
 stack's total thickness: it scales every film alike, so a beetle's colour still flows over the
 surface.  :attr:`FilmStack.total_nm` is the stack's own total, at scale 1.
@@ -35,9 +39,10 @@ MAX_FILM_NM = 1.0e5  # a film's thickness, at most (100 um: far beyond coherence
 MAX_IOR = 5.0
 MAX_DISPERSION = 10.0
 MAX_DISORDER = 0.5
+MAX_DOMAINS = 4096  # coherent domains one under the other, at most
 STACK_KINDS = ("periodic", "list")
 FILM_KEYS = ("medium", "thickness_nm", "ior", "dispersion", "k")
-STACK_KEYS = ("kind", "films", "periods", "disorder")
+STACK_KEYS = ("kind", "films", "periods", "disorder", "domains")
 
 
 def _single(x: float) -> float:
@@ -114,6 +119,7 @@ class FilmStack:
     periods: int = 1
     disorder: float = 0.0
     kind: str = "periodic"
+    domains: int = 1
     layers: tuple[Film, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -134,6 +140,8 @@ class FilmStack:
             out["periods"] = self.periods
         if self.disorder:
             out["disorder"] = self.disorder
+        if self.domains > 1:
+            out["domains"] = self.domains
         return out
 
     @classmethod
@@ -168,13 +176,19 @@ class FilmStack:
         if sum(f.thickness_nm for f in parsed) <= 0.0:
             raise ParameterError(f"{where}.films", "0 nm in all", "films whose thicknesses add up to more than 0 nm")
         disorder = _number(f"{where}.disorder", data.get("disorder", 0.0), 0.0, MAX_DISORDER)
-        return cls(parsed, int(periods), disorder, kind)
+        domains = data.get("domains", 1)
+        if isinstance(domains, bool) or not isinstance(domains, (int, float)) or domains != int(domains) or \
+                not 1 <= domains <= MAX_DOMAINS:
+            raise ParameterError(f"{where}.domains", domains, f"a whole number in [1, {MAX_DOMAINS}]")
+        return cls(parsed, int(periods), disorder, kind, int(domains))
 
     def describe(self) -> str:
         """One line for people: "8 x (chitin 90 nm, air 120 nm) over ..., 1.68 um, disorder 5%"."""
         films = ", ".join(f.label for f in self.films)
         head = f"{self.periods} x ({films})" if self.kind == "periodic" and self.periods > 1 else films
         tail = f", disorder {100 * self.disorder:g}%" if self.disorder else ""
+        if self.domains > 1:
+            tail += f"; {self.domains} domains adding their light"
         return f"{head}: {self.count} films, {self.total_nm:g} nm{tail}"
 
 

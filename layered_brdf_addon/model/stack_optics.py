@@ -5,10 +5,7 @@ and the lower medium (complex ``n2 + i k2``), every film with its complex index 
 wavelength.  The reflection amplitude is summed from the bottom up (Rouard's method, the
 transfer-matrix product written as a recursion): with ``r_{j,j+1}`` and ``t_{j,j+1}`` the
 Fresnel amplitudes of the boundary under film ``j`` and ``beta_j = 2 pi n~_j d_j cos~_j / lambda``
-its phase thickness,
-
-    r_j = (r_{j-1,j} + r_{j+1}' e^{2 i beta_j}) / (1 + r_{j-1,j} r_{j+1}' e^{2 i beta_j}),
-
+its phase thickness, ``r_j = (r_{j-1,j} + r_{j+1}' e^{2 i beta_j}) / (1 + r_{j-1,j} r_{j+1}' e^{2 i beta_j})``,
 and likewise the transmission amplitude.  ``Im beta_j >= 0`` (the root that decays into an
 absorbing film), so ``e^{2 i beta}`` never grows: films of ``k`` up to 10 and microns of thickness
 stay finite, where the product of transfer matrices overflows (:func:`reflect_transmit`, in single
@@ -17,10 +14,9 @@ products, ``log2(periods)`` of them (:func:`periodic_reflect_transmit`).  Reflec
 the means of the s and p polarisations (unpolarised light); ``T`` is the power that enters the
 lower medium (absorbed there where it absorbs), ``1 - R - T`` what the films absorb.
 
-A stack's ``disorder`` (:class:`.stack.FilmStack`) is averaged over :data:`DISORDER_DRAWS` stacks whose
-films' thicknesses are drawn with that relative spread, each film on its own (stratified, a fixed seed:
-the same stack bakes the same tables); the draws' interference averages out where a film's phase spreads
-past a wave.  8 draws hold the average of many for spreads of a few percent, not for tens of percent.
+A stack's ``disorder`` (:class:`.stack.FilmStack`) is averaged over :data:`DISORDER_DRAWS` stacks whose films'
+thicknesses are drawn with that relative spread, each film on its own (stratified, a fixed seed: the same
+stack bakes the same tables).  8 draws hold the average of many for spreads of a few percent, not tens.
 
 Colour: :func:`channel_weights` turns a spectrum sampled over 380-780 nm (every 5 nm, finer where the
 films that interfere call for it, :func:`spectral_step`) into linear Rec.709 per channel (the CIE 1931
@@ -33,12 +29,14 @@ from __future__ import annotations
 import functools
 import os
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from statistics import NormalDist
 
 import numpy as np
 
 from .dispersion import abbe_index
+from .colour_gamut import within_gamut
+from .incoherent import pile
 from .media import spectrum
 from .spectral_tables import observer, tables
 from .stack import FilmStack
@@ -188,13 +186,18 @@ def _through(cell, phase):
     return r, t * phase, rb * phase2, tb * phase
 
 
-def _power_ratio(ts, tp, n0, q0, n2, q2):
-    """Unpolarised transmittance (the power into the lower medium) from the amplitudes."""
+def _power_ratio(ts, tp, n0, q0, n2, q2, polarised=False):
+    """Unpolarised transmittance (the power into the lower medium) from the amplitudes (``polarised``: s, p)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         Ts = np.abs(ts) ** 2 * np.real(q2) / np.real(q0)
         # p: the power ratio with the cosines conjugated (the amplitudes are of the electric field)
         Tp = np.abs(tp) ** 2 * np.real(n2 * np.conj(q2 / n2)) / np.real(n0 * np.conj(q0 / n0))
-    return np.clip(np.nan_to_num(np.where(np.real(q0) > 0.0, 0.5 * (Ts + Tp), 0.0)), 0.0, 1.0)
+    return np.clip(np.nan_to_num(np.where(np.real(q0) > 0.0, _mean(np.stack([Ts, Tp]), polarised), 0.0)), 0.0, 1.0)
+
+
+def _mean(sp, polarised: bool):
+    """The mean of the s and p values on the first axis (unpolarised light), or both where ``polarised``."""
+    return sp if polarised else 0.5 * (sp[0] + sp[1])
 
 
 def _media(n0, indices, lower, cos0, lams):
@@ -212,13 +215,13 @@ def _media(n0, indices, lower, cos0, lams):
     return media, [cosines[id(n)] for n in media]
 
 
-def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths):
+def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths, polarised=False):
     """Unpolarised ``(R, T)`` of a stack, broadcast over ``cos0`` (the outside cosines, any shape ``S``)
     and ``wavelengths`` (shape ``(L,)``): arrays of shape ``S + (L,)``.
 
     ``indices``: one complex array (L,) per film, top first; ``thicknesses``: one thickness (nm) per
     film, each a number or an array broadcasting with ``S`` (a stack scaled point by point);
-    ``lower``: the lower medium's complex index (L,)."""
+    ``lower``: the lower medium's complex index (L,); ``polarised``: s and p on a first axis."""
     lams = np.asarray(wavelengths, dtype=float)
     media, qs = _media(n0, indices, lower, cos0, lams)
     # The sum runs in single precision (the films' many steps at half the cost; R within 1e-4 of double), both
@@ -243,13 +246,14 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths):
         if not lossless:
             t = tb * t * phase * inv
         r = (rb + r * phase2) * inv
-    R = np.clip(0.5 * (np.abs(r[0]) ** 2 + np.abs(r[1]) ** 2), 0.0, 1.0)
+    R = np.clip(_mean(np.abs(r) ** 2, polarised), 0.0, 1.0)
     if lossless:
         return R, 1.0 - R
-    return R, _power_ratio(t[0], t[1], media[0], qs[0], media[-1], qs[-1])
+    return R, _power_ratio(t[0], t[1], media[0], qs[0], media[-1], qs[-1], polarised)
 
 
-def periodic_reflect_transmit(n0: float, indices, thicknesses, periods: int, lower, cos0, wavelengths):
+def periodic_reflect_transmit(n0: float, indices, thicknesses, periods: int, lower, cos0, wavelengths,
+                              polarised=False):
     """:func:`reflect_transmit` of a period of films (``indices``, ``thicknesses``) repeated ``periods``
     times, at the cost of ``log2 periods`` star products: the period as a cell in the first film's medium
     (through each film and across each boundary, back into the first film), raised to the power of the
@@ -282,8 +286,8 @@ def periodic_reflect_transmit(n0: float, indices, thicknesses, periods: int, low
         stack = _star(_star(top[pol], _power(cell, periods)), bottom[pol])
         out.append(stack)
     (rs, ts, _, _), (rp, tp, _, _) = out
-    R = 0.5 * (np.abs(rs) ** 2 + np.abs(rp) ** 2)
-    return np.clip(R, 0.0, 1.0), _power_ratio(ts, tp, media[0], qs[0], media[-1], qs[-1])
+    R = _mean(np.stack([np.abs(rs) ** 2, np.abs(rp) ** 2]), polarised)
+    return np.clip(R, 0.0, 1.0), _power_ratio(ts, tp, media[0], qs[0], media[-1], qs[-1], polarised)
 
 
 def disorder_draws(stack: FilmStack) -> np.ndarray:
@@ -319,20 +323,28 @@ def coherent_optical(stack: FilmStack) -> float:
     return total
 
 
-def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, draw=None):
+def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, draw=None, polarised=False):
     """``(R, T)`` of ``stack`` scaled by ``scale`` (broadcasting with ``cos0``) at ``wavelengths``: arrays of
     shape ``broadcast(cos0, scale) + (L,)``; ``draw``: the films' thickness factors of one draw of its
-    disorder (:func:`disorder_draws`), or None (none)."""
+    disorder (:func:`disorder_draws`), or None (none); ``polarised``: s and p on a first axis.  Domains
+    (:mod:`.incoherent`): one in the medium above on both sides, one on the lower medium, piled per polarisation."""
     lams = np.asarray(wavelengths, dtype=float)
+    if stack.domains > 1:
+        one, around = replace(stack, domains=1), np.full(lams.shape, n0 + 0j)
+        clear = not any(np.any(film_index(f, lams).imag) for f in stack.films)  # then what is not reflected passes
+        domain = stack_spectra(one, n0, around, cos0, scale, lams, draw, True)
+        last = domain if np.allclose(lower, around) else stack_spectra(one, n0, lower, cos0, scale, lams, draw, True)
+        R, T = pile(domain, last, stack.domains, (clear, clear and not np.any(np.imag(lower))))
+        return _mean(R, polarised), _mean(T, polarised)
     cos0, scale = np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float)  # broadcast as the phases are
     if draw is None and stack.periods > 1:
-        period = stack.films
-        return periodic_reflect_transmit(n0, [film_index(f, lams) for f in period],
-                                         [scale * f.thickness_nm for f in period], stack.periods, lower, cos0, lams)
+        return periodic_reflect_transmit(n0, [film_index(f, lams) for f in stack.films], [scale * f.thickness_nm for f
+                                         in stack.films], stack.periods, lower, cos0, lams, polarised)
     factors = np.ones(stack.count) if draw is None else draw
     index = {f: film_index(f, lams) for f in stack.films}  # one array per film of the period: shared work
     return reflect_transmit(n0, [index[f] for f in stack.layers],
-                            [scale * f.thickness_nm * x for f, x in zip(stack.layers, factors)], lower, cos0, lams)
+                            [scale * f.thickness_nm * x for f, x in zip(stack.layers, factors)], lower, cos0, lams,
+                            polarised)
 
 
 def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, accuracy: str = "analytic",
@@ -369,20 +381,6 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
     absorbed = 1.0 - R - T
     R = within_gamut(R)
     return R, np.clip(1.0 - R - absorbed, 0.0, 1.0 - R)
-
-
-GAMUT_SOFTNESS = 0.05  # of a colour's brightest channel: how softly a channel outside [0, 1] is brought in
-
-
-def within_gamut(rgb):
-    """Channels of ``rgb`` (..., 3) held within [0, 1] smoothly: ``s log(1 + e^(x / s))`` towards 0 (and its
-    mirror towards 1), ``s`` :data:`GAMUT_SOFTNESS` of the colour's brightest channel, so that a colour that
-    leaves the gamut (a saturated Bragg peak's red) does not bend sharply where the tables' cubic splines
-    would overshoot; within a few ``s`` of the range's inside, a channel is its own value."""
-    rgb = np.asarray(rgb, dtype=float)
-    s = np.maximum(GAMUT_SOFTNESS * np.max(np.abs(rgb), axis=-1, keepdims=True), 1e-6)
-    low = s * np.logaddexp(0.0, rgb / s)
-    return 1.0 - s * np.logaddexp(0.0, (1.0 - low) / s)
 
 
 PAIRS_PER_THREAD = 256  # points a thread takes at least

@@ -50,7 +50,7 @@ _DICHROIC = {"kind": "list", "films": [{"medium": "tio2_amorphous", "thickness_n
 # schiller, the commonest), the stack's 64-film limit (a stone holds thousands, of smaller contrast).  The
 # crystal around them is labradorite of the range's middle index (1.566).  (A 5% spread of the lamellae moved
 # the reflectance by at most 0.001 and cost 7 times the bake: left out.)
-_LABRADORITE = {"kind": "periodic", "periods": 32, "films": [
+_LABRADORITE = {"kind": "periodic", "periods": 32, "domains": 16, "films": [
     {"ior": 1.559, "thickness_nm": 80.0}, {"ior": 1.573, "thickness_nm": 80.0}]}
 # A lens's single-layer anti-reflection coating: MgF2, a quarter wave at 550 nm, on crown glass.
 _AR_LENS = {"kind": "list", "films": [{"medium": "mgf2", "thickness_nm": quarter_wave("mgf2", 550.0)}]}
