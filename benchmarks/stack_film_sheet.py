@@ -134,7 +134,7 @@ def render(output: Path, size: int, samples: int, hdri_name: str, progress: bool
             ball.material_slots[0].material = lookdev.principled_thin_film(f"{name} Principled + Thin Film", **kw)
 
         tiles += [(name, layered), (f"{name} (one film)", one_film), (f"{name} (Principled)", principled)]
-        labels_base += [[preset_label(name), f"{stack.stack.count} films"],
+        labels_base += [[preset_label(name), stack.stack.size_label],
                         ["closest one film", f"{film_label(film)} \u00b7 \u0394E {fits[name]['mean_delta_e_2000']:.1f}"],
                         ["Principled + Thin Film", "the same film"]]
     title = (f"stacks | the closest one film | Principled BSDF + Thin Film \u00b7 {hdri.stem} HDRI + sun "

@@ -95,10 +95,7 @@ def tile_label(name: str) -> list[str]:
     p = preset(name)
     d = f"{p.d_min:g}\u2013{p.d_max:g} nm" if p.d_min != p.d_max else f"{p.d_min:g} nm"
     if p.stack is not None:
-        films = f"{p.stack.count} film{'s' if p.stack.count != 1 else ''}"
-        if p.stack.domains > 1:
-            films += f" x {p.stack.domains} domains"
-        return [preset_label(name), f"{films} \u00b7 {d}"]
+        return [preset_label(name), f"{p.stack.size_label} \u00b7 {d}"]
     return [preset_label(name), f"{d} \u00b7 n {p.r1_g:g}"]
 
 

@@ -134,6 +134,12 @@ class FilmStack:
     def count(self) -> int:
         return len(self.layers)
 
+    @property
+    def size_label(self) -> str:
+        """The stack's size for people: "1 film", "16 films", "64 films x 16 domains"."""
+        films = f"{self.count} film{'s' if self.count != 1 else ''}"
+        return films + (f" x {self.domains} domains" if self.domains > 1 else "")
+
     def to_dict(self) -> dict:
         out = {"kind": self.kind, "films": [f.to_dict() for f in self.films]}
         if self.kind == "periodic":
