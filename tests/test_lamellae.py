@@ -2,7 +2,7 @@
 tmm seen from inside the crystal, their domains against tmm's incoherent layers, their tables against the
 optics computed per point, the node group and the OSL shader against the closure form pixel by pixel (the
 schiller where the lamellae mirror the sun), lossless lamellae in a white furnace, and tables that a tilt does
-not rebake."""
+not rebake (its azimuth)."""
 from __future__ import annotations
 
 from functools import partial
@@ -99,7 +99,7 @@ def test_domains_make_the_schiller_brighter_and_only_lamellae_have_them():
 @pytest.mark.parametrize("params", [LABRADORITE, STEEP], ids=["labradorite", "tilted 50 deg"])
 def test_the_lamellae_tables_hold_their_optics(params):
     """The tables read as the node group reads them against the lamellae computed per point, 4096 probes, at
-    the schiller's highlight (the view mirrored about its closure's normal): a film's limits."""
+    the schiller's highlight (the view mirrored about its closure's normal): a tilted film's limits."""
     plan = plan_effects(params)
     layout, texels = bake(params, plan)
     check = check_tables(params, plan, layout, texels)
@@ -108,12 +108,14 @@ def test_the_lamellae_tables_hold_their_optics(params):
     assert texels.nbytes <= 1 << 20
 
 
-def test_a_tilt_keeps_the_tables_and_the_lamellae_do_not():
-    """The tables hold the lamellae's optics over the cosine to their normal: a tilt or its azimuth (the
-    geometry, per point) bakes nothing; the period or the crystal's index does."""
+def test_the_azimuth_keeps_the_tables_and_the_tilt_and_lamellae_do_not():
+    """The tables hold the lamellae's optics over the cosine to them and the geometry over the view's angle and
+    azimuth from them: the tilt's azimuth (which turns the lamellae point by point) bakes nothing; the tilt,
+    the period or the crystal's index does."""
     plan = plan_effects(LABRADORITE)
     digest = table_digest(LABRADORITE, plan)
-    assert table_digest(LABRADORITE.replace(tilt=30.0, tilt_azimuth=45.0), plan) == digest
+    assert table_digest(LABRADORITE.replace(tilt_azimuth=45.0), plan) == digest
+    assert table_digest(LABRADORITE.replace(tilt=30.0), plan) != digest
     assert table_digest(LABRADORITE.replace(layer_ior=1.57), plan) != digest
     thicker = {**LABRADORITE.stack.to_dict(), "films": [{"ior": 1.559, "thickness_nm": 85.0},
                                                            {"ior": 1.573, "thickness_nm": 85.0}]}

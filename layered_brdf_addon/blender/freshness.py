@@ -72,7 +72,7 @@ def _keep_chosen(mat, plan: EffectPlan) -> bool | None:
     """Tables of a material built for a chosen plan, rebaked for its current values: whether anything was; None
     where that plan cannot show them (an animated value that the tables hold), so that it is planned afresh."""
     params = params_of(mat)
-    if plan.tables and animated_parameters(mat) - unread_by_tables(params.normal_mode, params.stack is not None):
+    if plan.tables and animated_parameters(mat) - unread_by_tables(params.normal_mode):
         return None
     node = shader_node(mat)
     if not plan.tables or node is None:

@@ -44,7 +44,7 @@ from ..model.closure_light import (  # noqa: F401 (Cycles' closures on numpy, mo
 from ..model.params import WAVELENGTHS_NM, LayeredParams
 from ..model.plan import EffectPlan
 from ..model.policy import plan_effects
-from ..model.shading.lamella_shade import lamella_shade, response_optics
+from ..model.shading.lamella_shade import lamella_geometry, lamella_shade, response_optics
 from ..model.shading.stack_shade import stack_shade
 from ..model.stack_optics import StackResponse
 
@@ -111,8 +111,8 @@ def shade_closures(params: LayeredParams | Mapping, n0, n1, d, v, plan: EffectPl
         response = StackResponse.of(params)
         if plan.normals == "tilted":
             n1 = np.broadcast_to(np.asarray(n1, dtype=float), n0.shape)
-            return lamella_shade(ops_numpy, plan, values, ops_numpy.vec(n0), ops_numpy.vec(n1), ops_numpy.vec(v), d,
-                                 *response_optics(response, d))
+            geo = lamella_geometry(ops_numpy, plan, values, ops_numpy.vec(n0), ops_numpy.vec(n1), ops_numpy.vec(v))
+            return lamella_shade(ops_numpy, plan, values, geo, *response_optics(response, d))
         return stack_shade(ops_numpy, plan, values, ops_numpy.vec(n0), ops_numpy.vec(v), d, response)
     return program.shade(ops_numpy, program_inputs(params), ops_numpy.vec(n0), ops_numpy.vec(n1), d,
                          ops_numpy.vec(v), plan, wavelengths)

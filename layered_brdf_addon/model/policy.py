@@ -98,7 +98,7 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     animated = frozenset(animated)
     # Values the tables never hold may move (a flowing noise pattern); a tilted boundary's tables hold its tilt.
     tables = backend in BACKENDS and p.evaluation == "tables" and p.effects == "planned" and \
-        not (animated - unread_by_tables(p.normal_mode, p.stack is not None))
+        not (animated - unread_by_tables(p.normal_mode))
     if p.effects == "all":  # every effect stays, as if every socket could take any value
         animated |= {spec.name for spec in iter_sockets()}
 

@@ -52,7 +52,7 @@ from .shading.lobes import (ANISO_FLOOR, INV_2PI, MIN_COS, angle2, beckmann_lamb
                             glossy_alphas, lobe_alphas, lobe_peak, lobe_shape)
 from .shading.placement import exit_direction, interference_centre, layer_path, lobe_geometry
 from .shading.spectral_mode import merged_group_weights, shade_spectral, spectral_groups, spectral_step
-from .shading.lamella_shade import lamella_shade, response_optics, tabulated_lamellae
+from .shading.lamella_shade import lamella_geometry, lamella_shade, response_optics, tabulated_lamellae
 from .shading.stack_shade import stack_shade
 from .shading.step import shader_function
 from .shading.tables import TableLayout, tabulated_shade
@@ -79,7 +79,7 @@ __all__ = [
     "tilt_axis", "tilt_axis_about", "tilted_normal",
     "FLOAT_LIMIT", "clamped_inputs", "direction_input", "program_inputs", "CLEAR_K", "base_weight",
     "base_transmittance", "passed_at", "passed_to_base", "TableLayout", "tabulated_shade", "lamella_shade",
-    "tabulated_lamellae", "stack_shade", "shade", "layered_surface",
+    "tabulated_lamellae", "lamella_geometry", "stack_shade", "shade", "layered_surface",
     "surface_geometry",
 ]
 
@@ -174,9 +174,9 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None, *,
     P, n0, v, p_obj, pattern, d, axis, n1 = surface_geometry(ops, plan, thickness=thickness, lower=lower, axis=axis)
     lamellae = plan.stack and plan.normals == "tilted"
     if plan.tables and lamellae:
-        with ops.stage("Tilted lamellae in a crystal: the top's gloss, the schiller through the top, the lamellae's "
-                       "optics read from the material's baked tables (the cosine to the lamellae, d)"):
-            res = tabulated_lamellae(ops, plan, layout, P, n0, n1, v, d)
+        with ops.stage("Tilted lamellae in a crystal: the top's gloss and the schiller read from the material's baked "
+                       "tables (the view's angle and azimuth from the lamellae; the cosine to them, d)"):
+            res = tabulated_lamellae(ops, plan, layout, P, n0, v, d, axis)
     elif plan.tables:
         with ops.stage("Lobes and interference from the material's baked tables: the view's angle, d "
                        "(and the view's azimuth from the lower normal)"):
@@ -187,7 +187,7 @@ def layered_surface(ops, plan: EffectPlan, layout: TableLayout | None = None, *,
                              "(stack=StackResponse); the shaders read them from its tables")
         if lamellae:
             with ops.stage("Tilted lamellae in a crystal: the top's gloss, the schiller through the top"):
-                res = lamella_shade(ops, plan, P, n0, n1, v, d, *response_optics(stack, d))
+                res = lamella_shade(ops, plan, P, lamella_geometry(ops, plan, P, n0, n1, v), *response_optics(stack, d))
         else:
             with ops.stage("A stack of films: its reflectance in one lobe, what it passes to the base"):
                 res = stack_shade(ops, plan, P, n0, v, d, stack)

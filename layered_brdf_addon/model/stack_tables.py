@@ -20,7 +20,9 @@ from .ops_numpy import ShadingPoint
 from .params import LayeredParams
 from .plan import EffectPlan
 from .shading.inputs import clamped_inputs
-from .shading.lamella_shade import LAMELLA_IMAGES
+from .shading.lamella_shade import AZIMUTH_ROWS, GEOMETRY_IMAGES, LAMELLA_IMAGES, lamella_geometry
+from .shading.surface_prelude import tilted_normal
+from .shading.tables import MIN_NORMAL_COS
 from .shading.stack_shade import stack_shade
 from .shading.tables import COS_SAMPLES, TableLayout
 from .stack_optics import ANGLE_NODES, NodeResponse, StackResponse, coherent_optical
@@ -56,26 +58,33 @@ LAMELLA_COS_SAMPLES = 128
 
 @dataclass(frozen=True)
 class LamellaLayout(TableLayout):
-    """The tables of tilted lamellae (:mod:`.shading.lamella_shade`): not closures but the lamellae's optics,
-    one image each of :data:`.shading.lamella_shade.LAMELLA_IMAGES` (RGB; alpha unused), over the square root of
-    the cosine to the lamellae and the thickness; ``leaving`` (where the plan has a diffuse part) adds what they
-    pass averaged over the hemisphere, every column of a row alike."""
+    """The tables of tilted lamellae (:mod:`.shading.lamella_shade`).  First their optics, one image each of
+    :data:`.shading.lamella_shade.LAMELLA_IMAGES` (RGB; alpha unused) over the square root of the cosine to the
+    lamellae and the thickness (``leaving``, where the plan has a diffuse part: what they pass averaged over
+    the hemisphere, every column of a row alike); then the geometry,
+    :data:`.shading.lamella_shade.GEOMETRY_IMAGES`, over the view's angle from ``n0`` (linearly) and its
+    azimuth from the lower normal (0..pi, the rows), the schiller's normal in the lower frame as a tilted
+    boundary's tables hold it (:func:`.shading.tables.lower_frame`)."""
 
     leaving: bool = False
 
     @property
-    def images(self) -> int:
+    def geometry_image(self) -> int:
         return len(LAMELLA_IMAGES) if self.leaving else len(LAMELLA_IMAGES) - 1
+
+    @property
+    def images(self) -> int:
+        return self.geometry_image + len(GEOMETRY_IMAGES)
 
 
 def stack_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
     """The layout of a stack's tables: the reflected lobe (every channel) where the plan is specular; tilted
     lamellae's optics (:class:`LamellaLayout`)."""
-    if plan.normals == "tilted":
+    if plan.normals == "tilted":  # the rows hold the geometry's azimuths too
         row = LamellaLayout((), LAMELLA_COS_SAMPLES, 1, leaving=plan.diffuse)
-    else:
-        closures = (("reflect", (0, 1, 2)),) if plan.specular else ()
-        row = TableLayout(closures, COS_SAMPLES, 1, 1, (), _place(plan))
+        return replace(row, height=max(stack_rows(params, plan, row), AZIMUTH_ROWS))
+    closures = (("reflect", (0, 1, 2)),) if plan.specular else ()
+    row = TableLayout(closures, COS_SAMPLES, 1, 1, (), _place(plan))
     return replace(row, height=stack_rows(params, plan, row))
 
 
@@ -106,13 +115,42 @@ def stack_grid(params: LayeredParams, plan: EffectPlan, layout: TableLayout):
 def lamella_texels(params: LayeredParams, plan: EffectPlan, layout: LamellaLayout) -> np.ndarray:
     """Tilted lamellae's tables (float32, images x H x W x RGBA): what they reflect and pass at the texels'
     cosines to their normal (the crystal above them), and with ``layout.leaving`` their hemispherical mean."""
-    _, _, _, v, d, response = _texel_points(params, plan, layout)
+    pt, P, _, v, d, response = _texel_points(params, plan, layout)
     out = np.zeros((layout.images, layout.height, layout.width, 4), dtype=np.float32)
     R, T = response.colour(v[0, ..., 2], d[0])
     out[0, ..., :3], out[1, ..., :3] = R, T
     if layout.leaving:
         out[2, ..., :3] = response.hemispherical(d[0, :, 0])[1][:, None, :]
+    out[layout.geometry_image:] = _lamella_geometry(pt, P, plan, layout)
     return out
+
+
+def _lamella_geometry(pt, P, plan: EffectPlan, layout: LamellaLayout) -> np.ndarray:
+    """The geometry's images (:data:`.shading.lamella_shade.GEOMETRY_IMAGES`) at the texels: the view at the
+    angle ``pi/2 (1 - i / (W - 1))`` from ``n0 = +z`` in the xz plane, the lamellae tilted towards the azimuth
+    ``phi = pi j / (H - 1)`` about ``t = (-sin phi, cos phi, 0)``, so that the lower frame is ``w = (cos phi,
+    sin phi, 0)`` and ``b = -t`` (as :func:`.table_bake._shade_grid` bakes a tilted film's)."""
+    v, _, phi = table_grid.texel_grid(layout.width, 1, 0.0, 0.0, layout.height)
+    v, phi = v[:, 0], phi[:, 0]  # (H, W): rows the azimuths
+    n0 = np.zeros_like(v)
+    n0[..., 2] = 1.0
+    zero = np.zeros_like(phi)
+    axis = np.stack([-np.sin(phi), np.cos(phi), zero], axis=-1)
+    w = np.stack([np.cos(phi), np.sin(phi), zero], axis=-1)
+    n1 = tilted_normal(pt, ops_numpy.vec(n0), ops_numpy.vec(axis), float(P["tilt"]))
+    geo = lamella_geometry(pt, replace(plan, tables=False), P, ops_numpy.vec(n0), n1, ops_numpy.vec(v))
+    normal = np.broadcast_to(np.asarray(geo["schiller"].normal, dtype=float), v.shape)
+    z = np.maximum(normal[..., 2], MIN_NORMAL_COS)
+    gloss, schiller = geo["gloss"], geo["schiller"]
+
+    def root(alpha):
+        return np.sqrt(np.clip(alpha, 0.0, 1.0))
+
+    planes = [np.sum(normal * w, -1) / z, np.sum(normal * -axis, -1) / z, root(schiller.alpha), schiller.anisotropy,
+              geo["weight"], geo["cos"], geo["returned"], geo["top"],
+              gloss.weight[0], root(gloss.alpha), gloss.anisotropy, 0.0]
+    values = np.stack([np.broadcast_to(np.asarray(x, dtype=float), phi.shape) for x in planes], axis=-1)
+    return values.reshape(layout.height, layout.width, len(GEOMETRY_IMAGES), 4).transpose(2, 0, 1, 3)
 
 
 def stack_record(params: LayeredParams) -> dict:

@@ -24,8 +24,8 @@ from .program import shade, tabulated_lamellae, tabulated_shade
 from .shading.base_shader import base_receives_light, passed_to_base
 from .shading.inputs import clamped_inputs, program_inputs
 from .shading.surface_prelude import tilted_normal
-from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, PARALLEL_TOLERANCE, TABLE_FORMAT,
-                             NotTabulable, TableLayout, tabulable, unread_by_tables)
+from .shading.tables import (ANGLE_SAMPLES, AZIMUTH_SAMPLES, COS_SAMPLES, MIN_NORMAL_COS, PARALLEL_TOLERANCE,
+                             TABLE_FORMAT, NotTabulable, TableLayout, tabulable, unread_by_tables)
 from .shading.thin_film import harmonic_count
 
 def _fringe_samples(params: LayeredParams, plan: EffectPlan) -> int:
@@ -83,7 +83,6 @@ def _is_zero(x) -> bool:
     return isinstance(x, float) and x == 0.0
 
 
-MIN_NORMAL_COS = 1.0e-3  # a baked closure normal's component along n0, at least (its others are over it)
 PROBE_TILT = 10.0  # degrees: the tilt at which a plan's closures are probed for normals off n0
 
 
@@ -247,7 +246,7 @@ def spline_coefficients(texels: np.ndarray, layout: TableLayout | None = None) -
 def table_digest(params: LayeredParams, plan: EffectPlan) -> str:
     """What the tables of ``params`` for ``plan`` depend on, as a short digest: the table format, the
     plan, and every value the tables hold (not the pattern's, :func:`.shading.tables.unread_by_tables`)."""
-    unread = unread_by_tables(plan.normals, plan.stack)
+    unread = unread_by_tables(plan.normals)
     values = {k: v for k, v in held_values(params, "nodes", plan).items() if k not in unread}
     samples = [COS_SAMPLES, SAMPLES_PER_FRINGE] + \
         ([AZIMUTH_SAMPLES, ANGLE_SAMPLES] if plan.normals == "tilted" else [])
@@ -273,8 +272,7 @@ def tabulated_result(params: LayeredParams, plan: EffectPlan, layout: TableLayou
     P = clamped_inputs(pt, plan)
     t = None if axis is None else ops_numpy.vec(np.asarray(axis, dtype=float))
     if plan.stack and plan.normals == "tilted":
-        n1 = tilted_normal(pt, pt.shading_normal(), t, float(P["tilt"]))
-        return tabulated_lamellae(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), n1, pt.incoming(),
-                                  np.asarray(d, dtype=float))
+        return tabulated_lamellae(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), pt.incoming(),
+                                  np.asarray(d, dtype=float), t)
     return tabulated_shade(pt, replace(plan, tables=True), layout, P, pt.shading_normal(), pt.incoming(),
                            np.asarray(d, dtype=float), t)

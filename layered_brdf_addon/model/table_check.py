@@ -126,7 +126,7 @@ def check_tables(params: LayeredParams, plan: EffectPlan, layout, texels, points
     off = np.abs(am - bm).max(axis=-1) > RELATIVE * peak
     base = _base_difference(computed, tabulated, d.shape)
     return TableCheck(l1=l1, failing=float(np.mean(off)), base=base,
-                      limits=TILTED_LIMITS if layout.sliced else PARALLEL_LIMITS)
+                      limits=TILTED_LIMITS if plan.normals == "tilted" else PARALLEL_LIMITS)
 
 
 def base_share(result, shape) -> np.ndarray:

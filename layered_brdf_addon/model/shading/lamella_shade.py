@@ -26,48 +26,63 @@ arrives, channel by channel.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import replace
+
 from .base_shader import CLEAR_K
 from .channel_program import channel_lobes
 from .closures import Closure, ShadingResult
 from .energy import microfacet_cosine
 from .lobes import INV_2PI, closure_for
-from .tables import texel_coordinates
+from .tables import lower_frame, texel_coordinates
 from .thin_film import fresnel_reflectance
 
-LAMELLA_IMAGES = ("reflected", "passed", "leaving")  # what each of the lamellae's tables holds (RGB)
+LAMELLA_IMAGES = ("reflected", "passed", "leaving")  # the lamellae's optics' tables (RGB), over sqrt(c) and d
+# The geometry's tables, over the view's angle from n0 and its azimuth from the lower normal (RGBA each): the
+# schiller's closure (its normal's components in the lower frame, roughness, anisotropy), the schiller's weight
+# over R(c), the cosine c, what the top sends back inside, the top's reflectance; the gloss's closure.
+GEOMETRY_IMAGES = (("normal_x", "normal_y", "roughness", "anisotropy"), ("weight", "cosine", "returned", "top"),
+                   ("gloss_weight", "gloss_roughness", "gloss_anisotropy", ""))
+AZIMUTH_ROWS = 33  # the geometry's rows over the view's azimuth from the lower normal (0..pi), at least
 
 
-def lamella_shade(ops, plan, P, n0, n1, v, d, read, leaving) -> ShadingResult:
-    """The closures of lamellae of normal ``n1`` in a crystal of the layer's index (green's) under a top of
-    normal ``n0``, view ``v``, the inputs ``P`` clamped (:func:`.inputs.clamped_inputs`); ``read``,
-    ``leaving``: the lamellae's optics (above).  ``extras`` carries ``base_weight``, ``transmittance`` and
-    ``reflected`` as :func:`.stack_shade.stack_shade` does."""
-    res = ShadingResult()
-    r1, r0, e0, e1 = P["r1_g"], P["r0"], P["e0"], P["e1"]
+def lamella_geometry(ops, plan, P, n0, n1, v) -> dict:
+    """What the view and the lamellae's normal ``n1`` decide, not the lamellae's optics: the top's gloss (a
+    closure), the schiller's closure (its weight over ``R(c)``: ``weight``), the cosine ``cos`` to the
+    lamellae, what of the schiller's light the top sends back inside (``returned``) and the top's reflectance
+    ``top``, under a top of normal ``n0``, view ``v``, the inputs ``P`` clamped (:func:`.inputs.clamped_inputs`)."""
+    r1, r0, e0, e1, ks = P["r1_g"], P["r0"], P["e0"], P["e1"], P["ks"]
     eta = r0 / r1
     lobes = channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, plan.lobe, interference=False, energy=True)
-    cos_v = lobes["cos_v"]
-    top = fresnel_reflectance(ops, microfacet_cosine(ops, e0, cos_v), eta)
-    cos_lamellae = ops.clamp(-lobes["to_lower"], 0.0, 1.0)
-    R, T = read(cos_lamellae)
-    R, T = ops.components(R), ops.components(T)
-    ks = P["ks"]
+    top = fresnel_reflectance(ops, microfacet_cosine(ops, e0, lobes["cos_v"]), eta)
     # The light the lamellae return crosses the top on its way out at l*, as the light that leaves along v came in.
     out = ops.select(lobes["through"], (1.0 - fresnel_reflectance(ops, microfacet_cosine(ops, e0, lobes["cos_ls"]),
                                                                   eta)) * lobes["tail"], 0.0)
-    schiller = (1.0 - top) * out
+    weight = (1.0 - top) * out * (ks * (lobes["e_T"] + 2.0) * INV_2PI) * lobes["inv_peak_T"]
+    gloss = closure_for(ops, plan.lobe, "reflect", n0, e0, v, (top * ks * (e0 + 2.0) * INV_2PI,) * 3, energy=True)
+    schiller = Closure("transmit", lobes["N_T0"], lobes["e_T"], lobes["alpha_T"], (1.0, 1.0, 1.0), lobes["aniso_T"],
+                       lobes["U_T0"])
+    return dict(gloss=gloss, schiller=schiller, weight=weight, cos=ops.clamp(-lobes["to_lower"], 0.0, 1.0),
+                returned=1.0 - out, top=top)
+
+
+def lamella_shade(ops, plan, P, geo, read, leaving) -> ShadingResult:
+    """The closures of the lamellae of :func:`lamella_geometry`'s ``geo``, ``read`` and ``leaving`` their optics
+    (above).  ``extras`` carries ``base_weight``, ``transmittance`` and ``reflected`` as
+    :func:`.stack_shade.stack_shade` does."""
+    res = ShadingResult()
+    R, T = (ops.components(x) for x in read(geo["cos"]))
+    top = geo["top"]
     if plan.specular:
-        res.glossy.append(closure_for(ops, plan.lobe, "reflect", n0, e0, v, (top * ks * (e0 + 2.0) * INV_2PI,) * 3,
-                                      energy=True))
-        peak = schiller * (ks * (lobes["e_T"] + 2.0) * INV_2PI) * lobes["inv_peak_T"]
-        res.glossy.append(Closure("transmit", lobes["N_T0"], lobes["e_T"], lobes["alpha_T"],
-                                  tuple(r * peak for r in R), lobes["aniso_T"], lobes["U_T0"]))
+        s = geo["schiller"]
+        res.glossy += [geo["gloss"], Closure(s.name, s.normal, s.exponent, s.alpha, tuple(r * geo["weight"] for r in R),
+                                             s.anisotropy, s.tangent, s.roughness)]
     # What the lamellae pass, and what they reflect that the top sends back into the crystal (beyond its critical
     # angle, or its Fresnel share): it crosses the lamellae again at another angle, where they pass it.
-    entering = [(1.0 - top) * ops.clamp(t + r * (1.0 - out), 0.0, 1.0) for t, r in zip(T, R)]
+    entering = [(1.0 - top) * ops.clamp(t + r * geo["returned"], 0.0, 1.0) for t, r in zip(T, R)]
     kd = P["kd"]
     if plan.diffuse:
-        exit_top = 1.0 - fresnel_reflectance(ops, 1.0, eta)
+        exit_top = 1.0 - fresnel_reflectance(ops, 1.0, P["r0"] / P["r1_g"])
         res.diffuse = tuple(kd * P[f"base_{c}"] * entering[i] * ops.clamp(leaving[i], 0.0, 1.0) * exit_top
                             for i, c in enumerate("rgb"))
     clear = [ops.lt(P[f"k2_{c}"], CLEAR_K) for c in "rgb"]
@@ -76,7 +91,7 @@ def lamella_shade(ops, plan, P, n0, n1, v, d, read, leaving) -> ShadingResult:
         weight = ops.minimum(ops.minimum(passed[0], passed[1]), passed[2])
     else:
         weight, passed = 0.0, (0.0, 0.0, 0.0)
-    reflected = tuple(top + schiller * r for r in R)
+    reflected = tuple(top + (1.0 - top) * (1.0 - geo["returned"]) * r for r in R)
     res.extras.update(base_weight=weight, transmittance=ops.combine(*passed), reflected=ops.combine(*reflected))
     return res
 
@@ -88,14 +103,42 @@ def response_optics(response, d):
     return (lambda cos: response.colour(cos, d)), tuple(leaving[..., c] for c in range(3))
 
 
-def tabulated_lamellae(ops, plan, layout, P, n0, n1, v, d) -> ShadingResult:
-    """:func:`lamella_shade` reading the lamellae's optics from the material's tables (:data:`LAMELLA_IMAGES`):
-    the geometry per point, the optics of every lamella in two reads (three with a diffuse part)."""
-    def read(cos):
-        xy = texel_coordinates(ops, layout, P, ops.sqrt(cos), d)  # along x the cosine's root, as a stack's view
+def geometry_coordinates(ops, layout, n0, v, phi):
+    """Where the geometry's tables are read: the view's angle from ``n0`` along x (linearly: near normal view
+    the schiller turns with the view), its azimuth ``phi`` from the lower normal (0..pi) along y."""
+    w, h = layout.width, layout.height
+    cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
+    along = 1.0 - ops.atan2(ops.length(v - n0 * ops.dot(v, n0)), cos_v) * (2.0 / math.pi)
+    return ops.combine(ops.madd(along, (w - 1.0) / w, 0.5 / w), ops.madd(phi, (h - 1.0) / (h * math.pi), 0.5 / h),
+                       0.0)
+
+
+def tabulated_lamellae(ops, plan, layout, P, n0, v, d, axis) -> ShadingResult:
+    """:func:`lamella_shade` reading both the geometry (over the view's angle and azimuth from the lower normal,
+    tilt axis ``axis``) and the optics (over the cosine to the lamellae and the thickness) from the material's
+    tables: a few reads per point, whatever the number of films or domains."""
+    w, b, phi = lower_frame(ops, n0, v, axis)
+    gxy = geometry_coordinates(ops, layout, n0, v, phi)
+    first = layout.geometry_image
+    g = []
+    for k in range(len(GEOMETRY_IMAGES)):
+        colour, alpha = ops.table(first + k, gxy)
+        g.append([*ops.components(colour), alpha])
+    (nx, ny, rough, aniso), (weight, cos, returned, top), (gw, grough, ganiso, _) = g
+    normal = ops.closure_normal(n0 + w * nx + b * ny, n0)
+    geo = dict(weight=weight, cos=cos, returned=returned, top=top,
+               gloss=Closure("reflect", n0, None, grough * grough, (gw, gw, gw), ganiso, ops.cross(n0, v), grough),
+               schiller=Closure("transmit", normal, None, rough * rough, None, aniso, ops.cross(normal, v), rough))
+
+    optics = layout if plan.thickness != "constant" else replace(layout, height=1)  # every row alike: the middle
+
+    def along_d(root):
+        return texel_coordinates(ops, optics, P, root, d)
+
+    def read(c):
+        xy = along_d(ops.sqrt(c))  # along x the cosine's root, as a stack's view
         return ops.table(0, xy)[0], ops.table(1, xy)[0]
 
     # <T> is the same along a row: read where the cosine is 1.
-    leaving = ops.components(ops.table(2, texel_coordinates(ops, layout, P, 1.0, d))[0]) if plan.diffuse \
-        else (1.0, 1.0, 1.0)
-    return lamella_shade(ops, plan, P, n0, n1, v, d, read, leaving)
+    leaving = ops.components(ops.table(2, along_d(1.0))[0]) if plan.diffuse else (1.0, 1.0, 1.0)
+    return lamella_shade(ops, plan, P, geo, read, leaving)

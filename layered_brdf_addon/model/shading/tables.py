@@ -51,6 +51,7 @@ COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured:
 AZIMUTH_SAMPLES = 25
 ANGLE_SAMPLES = 32
 PARALLEL_TOLERANCE = 1.0e-5  # a baked closure's normal may differ from n0 by this (rounding)
+MIN_NORMAL_COS = 1.0e-3  # a baked closure normal's component along n0, at least (its others are over it)
 
 
 #: Values a tabulable plan reads before or besides its tables, never in them: the pattern's (they decide
@@ -61,11 +62,10 @@ UNREAD_BY_TABLES = frozenset({"noise_scale", "noise_detail", "noise_roughness", 
                               "tilt_azimuth", "bump_strength"})
 
 
-def unread_by_tables(normals: str, stack: bool = False) -> frozenset:
+def unread_by_tables(normals: str) -> frozenset:
     """:data:`UNREAD_BY_TABLES` for a lower boundary of mode ``normals``: a tilted boundary's tables hold
-    its tilt (not the tilt's azimuth, which turns the lower normal about ``n0`` point by point); tilted
-    lamellae's (a ``stack``'s) do not: the shader follows their normal per point (:mod:`.lamella_shade`)."""
-    return UNREAD_BY_TABLES - {"tilt"} if normals == "tilted" and not stack else UNREAD_BY_TABLES
+    its tilt (not the tilt's azimuth, which turns the lower normal about ``n0`` point by point)."""
+    return UNREAD_BY_TABLES - {"tilt"} if normals == "tilted" else UNREAD_BY_TABLES
 
 
 class NotTabulable(ValueError):
