@@ -94,7 +94,10 @@ class EffectPlan:
                        + (", and over the pixel's footprint in OSL" if self.footprint else ""))
         if not self.interference:
             out.append("no interference: the layer is thick enough for it to average out over the band")
-        if self.stack:
+        if self.stack and self.normals == "tilted":
+            out.append("a stack of films as tilted lamellae in a crystal: the crystal's gloss, the lamellae's "
+                       "schiller through it, what they pass to the base")
+        elif self.stack:
             out.append("a stack of films: its reflectance (every film, both polarisations) in one lobe, what it "
                        "passes to the base")
         elif self.optics == "physical":
@@ -106,7 +109,10 @@ class EffectPlan:
         if self.specular and not self.stack:
             out.append("per-channel transmitted lobes (dispersion)" if self.dispersion
                        else "one shared transmitted lobe (equal indices)")
-        if self.tables:
+        if self.tables and self.stack and self.normals == "tilted":
+            out.append("the lamellae's optics (cosine to them x thickness) and geometry (view angle x azimuth from "
+                       "them) read from tables baked for the material's values")
+        elif self.tables:
             axes = "view angle x thickness" + (" x the lower normal's azimuth" if self.normals == "tilted" else "")
             out.append(f"closures read from tables baked for the material's values ({axes})")
         return out
