@@ -14,15 +14,16 @@ light adds.  Three parts:
   ``(1 - F(v)) R(c) (1 - F(l*))``, ``F`` the top's reflectance;
 * **what the lamellae pass**, ``T(c)`` after the top's ``1 - F(v)``, and what they reflect that the top sends back
   inside (its ``F(l*)``, or all of it past the critical angle: it meets the lamellae again at another angle, where
-  they pass it), reaches the crystal's body: the diffuse part
-  takes ``kd`` of it (the light scattered there crosses the lamellae and the top again on its way out: ``<T>``,
-  what the lamellae pass averaged over the hemisphere, and the top's ``1 - F`` at normal incidence), the Base
-  Shader the rest, where the lower medium is clear.
+  they pass it), reaches the crystal's body: the diffuse part takes ``kd`` of it (the light scattered there
+  crosses the lamellae and the top again on its way out: ``<T>``, what the lamellae pass averaged over the
+  hemisphere, and the top's ``1 - F`` at normal incidence), the Base Shader the rest, where the lower medium is
+  clear.
 
-``read(cos)`` gives the lamellae's ``(R, T)`` per channel at the cosine ``cos`` to their normal (at the point's
-thickness), ``leaving`` their ``<T>``: from the material's tables in the shaders (:func:`tabulated_lamellae`,
-baked by :mod:`..stack_tables`), from the optics on numpy.  Reflected, passed and absorbed light add up to what
-arrives, channel by channel.
+:func:`lamella_geometry` is what the view and the lamellae's normal decide (every closure's shape, ``c``, the
+top's share), :func:`lamella_shade` the closures from it and the lamellae's optics: ``read(cos)`` their ``(R,
+T)`` per channel at the cosine ``cos`` (at the point's thickness), ``leaving`` their ``<T>``.  The shaders read
+both from the material's tables (:func:`tabulated_lamellae`, baked by :mod:`..stack_tables`); numpy computes
+them.  Reflected, passed and absorbed light add up to what arrives, channel by channel.
 """
 from __future__ import annotations
 
