@@ -67,8 +67,9 @@ def test_a_fit_with_no_start_chooses_the_stack_and_its_period(tmp_path, name, sc
     (["--layer", "stacks"], ["'layer'", "'stacks'", "film, stack"]),
     (["--layer", "stack", "--start", "nacre"], ["'layer'", "no value with --start"]),
     (["--layer", "stack", "--principled", "look.blend", "--material", "M"], ["'layer'", "'film' for a render"]),
+    (["--start", "labradorite"], ["'start'", "'labradorite'", "mirror direction", "tilted lamellae"]),
 ])
-def test_a_bad_layer_is_refused_naming_it_and_writes_nothing(tmp_path, capsys, extra, said):
+def test_a_bad_layer_or_start_is_refused_naming_it_and_writes_nothing(tmp_path, capsys, extra, said):
     _table(tmp_path / "stack.csv", "jewel_beetle", 1.0)
     (tmp_path / "look.blend").write_bytes(b"")
     target = [] if "--principled" in extra else ["--reflectance", str(tmp_path / "stack.csv")]

@@ -131,6 +131,10 @@ def fit_request_from_options(options: Mapping[str, Any]) -> FitRequest:
                   **({"layer": layer} if layer else {})}
     else:
         (start, record), pool = start_of(given), ()
+        if source.kind == "reflectance" and start.stack is not None and start.normal_mode == "tilted":
+            raise ParameterError("start", given.get("start") or given.get("params"),
+                                 "a structure that reflects about the mirror direction a --reflectance table holds "
+                                 "(tilted lamellae send their schiller away from it)")
     inputs = list(source.inputs)
     if record["params_file"] is not None:
         inputs.append(("the params file", record["params_file"]))
