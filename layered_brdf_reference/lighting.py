@@ -46,8 +46,10 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
     """Pixels (P, 3) under a uniform environment of ``radiance``, by Monte Carlo.
 
     Directions come from a mixture of cosine sampling (1/3) and a Phong lobe about the
-    mirror direction (2/3, exponent half the narrower of ``e0`` and ``e1 / r1^2``, a stack's ``e0``); the
-    estimator divides by the mixture density, so it is unbiased for any parameters.
+    mirror direction (2/3, exponent half the narrower of ``e0`` and ``e1 / r1^2``, a stack's ``e0``); for
+    tilted lamellae (a stack with a tilted lower normal) a third, about their schiller's direction
+    (:func:`_schiller_directions`, exponent half of ``e1 / r1^2``), a third each; the estimator divides by
+    the mixture density, so it is unbiased for any parameters.
     ``shading(params, n0, n1, d, l, v)`` (pixel per unit irradiance from ``l``) replaces
     the exact model, e.g. :func:`layered_brdf_reference.closures.closure_shading` for a white-furnace prediction.
     ``environment(l)``: the radiance (..., 3) arriving from the directions ``l`` (an HDRI), times
@@ -58,10 +60,15 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
     P = n0.shape[0]
     v = np.broadcast_to(np.asarray(v, dtype=float), n0.shape)
     r_v = reflect(-v, n0)
-    # A film stack has one lobe, of the top boundary (no transmitted lobe of its own exponent).
-    narrowest = params.e0 if getattr(params, "stack", None) is not None else \
-        min(params.e0, params.e1 / max(params.r1) ** 2)
+    # A film stack has one lobe, of the top boundary (no transmitted lobe of its own exponent); tilted lamellae
+    # have the top's and their schiller's, sampled each about its own direction.
+    stack = getattr(params, "stack", None) is not None
+    lamellae = stack and params.normal_mode == "tilted"
+    narrowest = params.e0 if stack else min(params.e0, params.e1 / max(params.r1) ** 2)
     k = max(0.5 * narrowest, 1.0)
+    if lamellae:
+        k_s = max(0.5 * params.e1 / params.r1[1] ** 2, 1.0)
+        schiller = _schiller_directions(params, n0, np.asarray(n1, dtype=float), v, r_v)
     out = np.zeros((P, 3))
     batch = max(1, min(samples, 65536 // max(P, 1)))
     done = 0
@@ -75,6 +82,10 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
         lobe_dir = _phong_dirs(RV, k, u1, u2)
         l = np.where((u3 < 1.0 / 3.0)[..., None], cos_dir, lobe_dir)
         pdf = _phong_pdf(N0, 1.0, l) / 3.0 + 2.0 / 3.0 * _phong_pdf(RV, k, l)
+        if lamellae:
+            S = rep(schiller)
+            l = np.where((u3 > 2.0 / 3.0)[..., None], _phong_dirs(S, k_s, u1, u2), l)
+            pdf = (_phong_pdf(N0, 1.0, l) + _phong_pdf(RV, k, l) + _phong_pdf(S, k_s, l)) / 3.0
         if shading is None:
             val = brdf_times_cos(params, N0, N1, D, V, l, wavelengths)
         else:
@@ -85,6 +96,20 @@ def environment_shading(params: LayeredParams, n0, n1, d, v, radiance: float = 1
         out += est.reshape(b, P, 3).sum(axis=0)
         done += b
     return radiance * out / samples
+
+
+def _schiller_directions(params, n0, n1, v, r_v):
+    """Where tilted lamellae send the view's light (eqs. 10, 11): ``-v`` refracted into the crystal (the
+    layer's index, green's), mirrored on the lamellae (normal ``n1``) and refracted out; the top's mirror
+    direction ``r_v`` where it cannot leave."""
+    eta = params.r0 / params.r1[1]
+    cos_v = np.clip(dot(v, n0), 0.0, 1.0)
+    t = -v * eta + n0 * (eta * cos_v - np.sqrt(np.maximum(1.0 - eta * eta * (1.0 - cos_v ** 2), 0.0)))[..., None]
+    r = t - 2.0 * dot(t, n1)[..., None] * n1
+    cos_r = dot(r, n0)
+    k = 1.0 - (1.0 - cos_r ** 2) / (eta * eta)
+    out = r / eta + n0 * (np.sqrt(np.maximum(k, 0.0)) - cos_r / eta)[..., None]
+    return np.where(((k > 0.0) & (cos_r > 0.0))[..., None], safe_normalize(out), r_v)
 
 
 def area_light_shading(params: LayeredParams, n0, n1, d, v, points, light_matrix, size: float, power: float,
