@@ -35,7 +35,7 @@ from .channel_program import channel_lobes
 from .closures import Closure, ShadingResult
 from .energy import microfacet_cosine
 from .lobes import INV_2PI, closure_for
-from .tables import lower_frame, texel_coordinates
+from .tables import lower_frame, texel_coordinates, view_angle
 from .thin_film import fresnel_reflectance
 
 LAMELLA_IMAGES = ("reflected", "passed", "leaving")  # the lamellae's optics' tables (RGB), over sqrt(c) and d
@@ -108,8 +108,7 @@ def geometry_coordinates(ops, layout, n0, v, phi):
     """Where the geometry's tables are read: the view's angle from ``n0`` along x (linearly: near normal view
     the schiller turns with the view), its azimuth ``phi`` from the lower normal (0..pi) along y."""
     w, h = layout.width, layout.height
-    cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
-    along = 1.0 - ops.atan2(ops.length(v - n0 * ops.dot(v, n0)), cos_v) * (2.0 / math.pi)
+    along = view_angle(ops, n0, v, ops.clamp(ops.dot(v, n0), 0.0, 1.0))
     return ops.combine(ops.madd(along, (w - 1.0) / w, 0.5 / w), ops.madd(phi, (h - 1.0) / (h * math.pi), 0.5 / h),
                        0.0)
 

@@ -181,12 +181,16 @@ def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
     w = layout.width
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     if layout.sliced:
-        # The view's angle from n0, linearly: a tilted boundary's closures turn with the view about n0, so
-        # near normal view they vary with the angle, not its cosine.
-        along = 1.0 - ops.atan2(ops.length(v - n0 * ops.dot(v, n0)), cos_v) * (2.0 / math.pi)
-        x = ops.madd(along, (w - 1.0) / layout.image_width, 1.5 / layout.image_width)
+        x = ops.madd(view_angle(ops, n0, v, cos_v), (w - 1.0) / layout.image_width, 1.5 / layout.image_width)
         return _with_thickness(ops, layout, P, x, d)
     return texel_coordinates(ops, layout, P, ops.sqrt(cos_v), d)
+
+
+def view_angle(ops, n0, v, cos_v):
+    """The view's angle from ``n0`` as a table's columns hold it, linearly: 1 along ``n0``, 0 at grazing (a
+    tilted boundary's closures turn with the view about ``n0``, so near normal view they vary with the angle,
+    not its cosine); ``cos_v``: the view's cosine to ``n0``, clamped."""
+    return 1.0 - ops.atan2(ops.length(v - n0 * ops.dot(v, n0)), cos_v) * (2.0 / math.pi)
 
 
 def texel_coordinates(ops, layout: TableLayout, P, root, d):
