@@ -270,7 +270,7 @@ def table_readers_intact(group, layout) -> bool:
 
 
 def layout_record(layout) -> str:
-    record = f"format {tables_module.TABLE_FORMAT}:{layout.closures}:{layout.width}x{layout.height}"
+    record = f"format {tables_module.TABLE_FORMAT}:{layout.closures}:{layout.width}x{layout.height}:{layout.images}"
     return record + f":{layout.azimuths} azimuths {layout.oriented}" if layout.sliced else record
 
 

@@ -243,6 +243,11 @@ class NodeOps:
     def atan2(self, y, x):
         return self.math("ARCTAN2", y, x)
 
+    def acos(self, x):
+        if isinstance(x, Number):
+            return math.acos(min(max(x, -1.0), 1.0))
+        return self.math("ARCCOSINE", x)  # Blender's guards: acos of the value clamped to [-1, 1]
+
     def maximum(self, a, b):
         if isinstance(a, Number) and isinstance(b, Number):
             return max(a, b)
@@ -325,6 +330,10 @@ class NodeOps:
         """Unit ``v``; ``fallback`` where ``|v|^2 <= 1e-20`` (and where it is NaN: comparisons fail)."""
         ok = self.gt(self.dot(v, v), 1e-20)
         return self.select_vec(ok, self.vmath("NORMALIZE", v), fallback)
+
+    def unit(self, v):
+        """``v`` over its length (Normalize: the zero vector stays zero)."""
+        return self.vmath("NORMALIZE", v)
 
     def closure_normal(self, v, fallback):
         """A closure's Normal: ``v`` as it is, since the BSDF nodes normalise their Normal themselves (Cycles

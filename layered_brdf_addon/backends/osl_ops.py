@@ -131,6 +131,11 @@ class OslOps:
     def atan2(self, y, x):
         return self.call_expr("atan2", (y, x), "float")
 
+    def acos(self, x):
+        if isinstance(x, Number):
+            return math.acos(min(max(x, -1.0), 1.0))
+        return self.call_expr("acos", (self.clamp(x, -1.0, 1.0),), "float")
+
     def _extremum(self, name, a, b, fn):
         if isinstance(a, Number) and isinstance(b, Number):
             return fn(a, b)
@@ -201,6 +206,10 @@ class OslOps:
     def normalize(self, v, fallback):
         """Unit ``v``; ``fallback`` for a zero-length or non-finite ``v``."""
         return self.call_expr("safe_normalize_or", (v, fallback), "vector")
+
+    def unit(self, v):
+        """``v`` over its length (OSL's normalize: the zero vector stays zero)."""
+        return self.call_expr("normalize", (v,), "vector")
 
     def closure_normal(self, v, fallback):
         return self.normalize(v, fallback)

@@ -78,6 +78,11 @@ def atan2(y, x):
     return np.arctan2(y, x)
 
 
+def acos(x):
+    """The angle of the cosine ``x`` clamped to [-1, 1] (guarded, like Blender's Math node)."""
+    return np.arccos(np.clip(x, -1.0, 1.0))
+
+
 @_elementwise
 def maximum(a, b):
     return np.maximum(a, b)
@@ -131,6 +136,17 @@ def normalize(v, fallback):
     with np.errstate(invalid="ignore", divide="ignore"):
         u = v / np.sqrt(np.where(ok, n2, 1.0))[..., None]
     return vec(np.where(ok[..., None], u, np.broadcast_to(_plain(fallback), np.shape(u))))
+
+
+def unit(v):
+    """``v`` over its length, the zero vector (and a non-finite one) zero, as Blender's Normalize gives it: for a
+    vector its caller knows is not degenerate, or guards itself."""
+    v = _plain(v)
+    n2 = dot(v, v)
+    ok = np.isfinite(n2) & (n2 > 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = v / np.sqrt(np.where(ok, n2, 1.0))[..., None]
+    return vec(np.where(ok[..., None], u, 0.0))
 
 
 class _Vec(np.ndarray):

@@ -22,7 +22,8 @@ class EffectPlan:
     footprint: bool = True  # analytic: also over the pixel's footprint, where the backend has derivatives (OSL)
     optics: str = "paper"  # "paper": the lower boundary a perfect mirror; "physical": thin-film optics
     multibeam: bool = False  # physical: the harmonics of the beams that bounce inside the layer (program.harmonic_count)
-    passes: bool = True  # physical: the lower medium may pass light to the Base Shader (False: it absorbs, a metal)
+    passes: bool = True  # physical: light may reach the Base Shader (False: the lower medium absorbs it, a metal, or
+    # the diffuse part takes all of it, kd = 1)
     index: str = "channels"  # the layer's index: "channels" (three sockets) or "ior" (IOR and Dispersion)
     tables: bool = False  # the closures read from the material's baked tables (.shading.tables), not computed
     stack: bool = False  # the layer is a stack of films (.stack): one lobe of the stack's reflectance, from tables
@@ -96,14 +97,15 @@ class EffectPlan:
             out.append("no interference: the layer is thick enough for it to average out over the band")
         if self.stack and self.normals == "tilted":
             out.append("a stack of films as tilted lamellae in a crystal: the crystal's gloss, the lamellae's "
-                       "schiller through it, what they pass to the base")
+                       "schiller through it" + (", what they pass to the base" if self.passes else ""))
         elif self.stack:
-            out.append("a stack of films: its reflectance (every film, both polarisations) in one lobe, what it "
-                       "passes to the base")
+            out.append("a stack of films: its reflectance (every film, both polarisations) in one lobe"
+                       + (", what it passes to the base" if self.passes else ""))
         elif self.optics == "physical":
             out.append("thin-film optics: exact Fresnel at both boundaries, reflection phases"
                        + (", and the beams that bounce inside the layer (more harmonics)" if self.multibeam else "")
-                       + ("" if self.passes else "; an absorbing lower medium: nothing reaches the Base Shader"))
+                       + ("" if self.passes else "; nothing reaches the Base Shader (an absorbing lower medium, or "
+                                                   "a diffuse part that takes all)"))
         if self.index == "ior":
             out.append("the layer's indices from its IOR and Dispersion (Abbe number)")
         if self.specular and not self.stack:

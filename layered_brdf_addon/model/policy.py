@@ -66,7 +66,7 @@ DECIDING_PARAMETERS = {
     "interference": ("d_min", "r1_r", "r1_g", "r1_b", "layer_ior", "layer_dispersion", "r0"),
     "multibeam": ("r1_r", "r1_g", "r1_b", "layer_ior", "layer_dispersion", "r0", "r2_r", "r2_g", "r2_b", "k2_r",
                   "k2_g", "k2_b"),
-    "passes": ("k2_r", "k2_g", "k2_b"),
+    "passes": ("k2_r", "k2_g", "k2_b", "kd"),
 }
 
 
@@ -125,7 +125,7 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     interference = not (banded and not moving("interference") and not linked and interference_averages_out(p))
     physical = p.optics == "physical"
     multibeam = physical and interference and (moving("multibeam") or beam_contrast(p) > MULTIBEAM_CONTRAST)
-    passes = not physical or moving("passes") or min(p.k2) < CLEAR_K
+    passes = not physical or moving("passes") or _passes(p)
     plan = EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
                       thickness=thickness, normals=normals, dispersion=dispersion, lobe=p.lobe,
                       spectral=spectral, interference=interference, analytic=analytic, optics=p.optics,
@@ -137,11 +137,17 @@ def plan_effects(p: LayeredParams, animated: Iterable[str] = (), backend: str = 
     return replace(plan, tables=True)
 
 
+def _passes(p: LayeredParams) -> bool:
+    """Whether light reaches the Base Shader with thin-film optics: a clear lower medium (a metal keeps what
+    enters it) under a diffuse part that does not take all of it (``kd`` below 1)."""
+    return min(p.k2) < CLEAR_K and p.kd < 1.0
+
+
 def _stack_plan(p: LayeredParams, moving, thickness: str, spectral: int, analytic: bool) -> EffectPlan:
     """A film stack's plan: one lobe of the stack's reflectance, always read from tables baked for the
     material's values (the stack has no per-point shader: its films are many), a linked thickness read
     within Thickness Min and Max."""
-    passes = moving("passes") or min(p.k2) < CLEAR_K
+    passes = moving("passes") or _passes(p)
     return EffectPlan(specular=p.ks > 0.0 or moving("specular"), diffuse=p.kd > 0.0 or moving("diffuse"),
                       thickness=thickness, normals="tilted" if p.normal_mode == "tilted" else "parallel",
                       dispersion=False, lobe=p.lobe, spectral=spectral,

@@ -25,7 +25,8 @@ from .shading.surface_prelude import tilted_normal
 from .shading.tables import MIN_NORMAL_COS
 from .shading.stack_shade import stack_shade
 from .shading.tables import COS_SAMPLES, TableLayout
-from .stack_optics import ANGLE_NODES, NodeResponse, StackResponse, coherent_optical
+from .stack_optics import (ANGLE_NODES, SPECTRUM_NM, NodeResponse, StackResponse, coherent_optical, film_index,
+                           lower_index)
 
 
 
@@ -59,18 +60,28 @@ LAMELLA_COS_SAMPLES = 128
 @dataclass(frozen=True)
 class LamellaLayout(TableLayout):
     """The tables of tilted lamellae (:mod:`.shading.lamella_shade`).  First their optics, one image each of
-    :data:`.shading.lamella_shade.LAMELLA_IMAGES` (RGB; alpha unused) over the square root of the cosine to the
-    lamellae and the thickness (``leaving``, where the plan has a diffuse part: what they pass averaged over
-    the hemisphere, every column of a row alike); then the geometry,
+    :attr:`optics` (RGB; alpha unused) over the square root of the cosine to the lamellae and the thickness:
+    what they reflect; what they pass (``passed``: where they absorb, for clear lamellae pass what they do not
+    reflect, a read less); what they pass averaged over the hemisphere (``leaving``, where the plan has a
+    diffuse part; every column of a row alike); then the geometry,
     :data:`.shading.lamella_shade.GEOMETRY_IMAGES`, over the view's angle from ``n0`` (linearly) and its
     azimuth from the lower normal (0..pi, the rows), the schiller's normal in the lower frame as a tilted
     boundary's tables hold it (:func:`.shading.tables.lower_frame`)."""
 
     leaving: bool = False
+    passed: bool = True
+
+    @property
+    def optics(self) -> tuple[str, ...]:
+        """The optics' images, in order (of :data:`.shading.lamella_shade.LAMELLA_IMAGES`)."""
+        return tuple(name for name, kept in zip(LAMELLA_IMAGES, (True, self.passed, self.leaving)) if kept)
+
+    def optics_image(self, name: str) -> int:
+        return self.optics.index(name)
 
     @property
     def geometry_image(self) -> int:
-        return len(LAMELLA_IMAGES) if self.leaving else len(LAMELLA_IMAGES) - 1
+        return len(self.optics)
 
     @property
     def images(self) -> int:
@@ -81,7 +92,7 @@ def stack_layout(params: LayeredParams, plan: EffectPlan) -> TableLayout:
     """The layout of a stack's tables: the reflected lobe (every channel) where the plan is specular; tilted
     lamellae's optics (:class:`LamellaLayout`)."""
     if plan.normals == "tilted":  # the rows hold the geometry's azimuths too
-        row = LamellaLayout((), LAMELLA_COS_SAMPLES, 1, leaving=plan.diffuse)
+        row = LamellaLayout((), LAMELLA_COS_SAMPLES, 1, leaving=plan.diffuse, passed=absorbing(params))
         return replace(row, height=max(stack_rows(params, plan, row), AZIMUTH_ROWS))
     closures = (("reflect", (0, 1, 2)),) if plan.specular else ()
     row = TableLayout(closures, COS_SAMPLES, 1, 1, (), _place(plan))
@@ -118,9 +129,11 @@ def lamella_texels(params: LayeredParams, plan: EffectPlan, layout: LamellaLayou
     pt, P, _, v, d, response = _texel_points(params, plan, layout)
     out = np.zeros((layout.images, layout.height, layout.width, 4), dtype=np.float32)
     R, T = response.colour(v[0, ..., 2], d[0])
-    out[0, ..., :3], out[1, ..., :3] = R, T
+    out[0, ..., :3] = R
+    if layout.passed:
+        out[layout.optics_image("passed"), ..., :3] = T
     if layout.leaving:
-        out[2, ..., :3] = response.hemispherical(d[0, :, 0])[1][:, None, :]
+        out[layout.optics_image("leaving"), ..., :3] = response.hemispherical(d[0, :, 0])[1][:, None, :]
     out[layout.geometry_image:] = _lamella_geometry(pt, P, plan, layout)
     return out
 
@@ -147,10 +160,18 @@ def _lamella_geometry(pt, P, plan: EffectPlan, layout: LamellaLayout) -> np.ndar
         return np.sqrt(np.clip(alpha, 0.0, 1.0))
 
     planes = [np.sum(normal * w, -1) / z, np.sum(normal * -axis, -1) / z, root(schiller.alpha), schiller.anisotropy,
-              geo["weight"], geo["cos"], geo["returned"], geo["top"],
+              geo["weight"], geo["cos"], geo["out"], geo["through"],
               gloss.weight[0], root(gloss.alpha), gloss.anisotropy, 0.0]
     values = np.stack([np.broadcast_to(np.asarray(x, dtype=float), phi.shape) for x in planes], axis=-1)
     return values.reshape(layout.height, layout.width, len(GEOMETRY_IMAGES), 4).transpose(2, 0, 1, 3)
+
+
+def absorbing(params: LayeredParams) -> bool:
+    """Whether a film of ``params``'s stack, or its lower medium, absorbs anywhere in the visible: else the
+    stack passes exactly what it does not reflect."""
+    films = any(np.any(film_index(f, SPECTRUM_NM).imag > 0.0) for f in params.stack.films)
+    lower = lower_index(params.r2, params.k2, SPECTRUM_NM, params.lower_medium)
+    return bool(films or np.any(np.imag(lower) > 0.0))
 
 
 def stack_record(params: LayeredParams) -> dict:

@@ -22,7 +22,7 @@ def tangent_axis(ops, n0, up, fallback):
     """Tilt axis ``normalize(cross(up, n0))``; at the poles, where n0 is along ``up`` and the
     cross product vanishes (length below 1e-4), ``fallback``."""
     c = ops.cross(up, n0)
-    return ops.select_vec(ops.lt(ops.length(c), 1e-4), fallback, ops.normalize(c, fallback))
+    return ops.select_vec(ops.lt(ops.length(c), 1e-4), fallback, ops.unit(c))
 
 
 @shader_function
@@ -39,9 +39,10 @@ def tilt_axis_about(ops, n0, azimuth_deg, up, fallback):
 def tilted_normal(ops, n0, t, tilt_deg):
     """Lower normal of a constant tilt: ``n0`` rotated by ``tilt_deg`` about the axis ``t``
     (:func:`tilt_axis_about`, across ``n0``): ``n0 cos(tilt) + (t x n0) sin(tilt)``.  Any tilt up to
-    180 degrees is valid: at 90 or 180 degrees no path crosses the layer (eq. 11)."""
+    180 degrees is valid: at 90 or 180 degrees no path crosses the layer (eq. 11).  Unit as ``t`` is: ``n0`` and
+    ``t x n0`` are orthonormal."""
     a = tilt_deg * DEG
-    return ops.normalize(n0 * ops.cos(a) + ops.cross(t, n0) * ops.sin(a), n0)
+    return n0 * ops.cos(a) + ops.cross(t, n0) * ops.sin(a)
 
 
 @shader_function
@@ -126,9 +127,10 @@ def layer_thickness(ops, P, p_obj, plan: EffectPlan, pattern=None):
 
 def tilt_axis(ops, P, n0):
     """The axis a tilted lower boundary turns ``n0`` about at this point (:func:`tilt_axis_about`), from
-    the object's axes in world space: the tilt sticks to the object."""
-    up = ops.normalize(ops.object_to_world((0.0, 0.0, 1.0)), (0.0, 0.0, 1.0))
-    x_axis = ops.normalize(ops.object_to_world((1.0, 0.0, 0.0)), (1.0, 0.0, 0.0))
+    the object's axes in world space: the tilt sticks to the object.  An object flattened along its z axis (up
+    zero) takes its x axis: its faces' normals lie along z, where the x axis is across them."""
+    up = ops.unit(ops.object_to_world((0.0, 0.0, 1.0)))
+    x_axis = ops.unit(ops.object_to_world((1.0, 0.0, 0.0)))
     return tilt_axis_about(ops, n0, P["tilt_azimuth"], up, x_axis)
 
 

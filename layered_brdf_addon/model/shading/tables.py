@@ -41,10 +41,10 @@ from .base_shader import base_receives_light, top_transmittance
 from .closures import Closure, ShadingResult
 from .inputs import program_inputs
 
-TABLE_FORMAT = 5  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
+TABLE_FORMAT = 6  # what a texel holds (this module's layout; 2: cubic B-spline coefficients in the node group's
 # images; 3: one-channel closures' values packed; 4: a tilted boundary's closure normals in the lower normal's
-# frame; 5: energy-keeping lobes, and what passes to the base per channel); baked tables of another format are
-# rebaked
+# frame; 5: energy-keeping lobes, and what passes to the base per channel; 6: clear lamellae without an image of
+# what they pass); baked tables of another format are rebaked
 COS_SAMPLES = 64  # texels along the square root of the view's cosine (measured: docs/tables.md)
 # A tilted boundary's tables (measured: docs/tables.md#a-tilted-boundary): slices over the view's azimuth
 # about n0 from the lower normal (0..pi), and texels along the view's angle in each.
@@ -181,16 +181,18 @@ def table_coordinates(ops, layout: TableLayout, P, n0, v, d):
     w = layout.width
     cos_v = ops.clamp(ops.dot(v, n0), 0.0, 1.0)
     if layout.sliced:
-        x = ops.madd(view_angle(ops, n0, v, cos_v), (w - 1.0) / layout.image_width, 1.5 / layout.image_width)
+        x = view_column(ops, cos_v, (w - 1.0) / layout.image_width, 1.5 / layout.image_width)
         return _with_thickness(ops, layout, P, x, d)
     return texel_coordinates(ops, layout, P, ops.sqrt(cos_v), d)
 
 
-def view_angle(ops, n0, v, cos_v):
-    """The view's angle from ``n0`` as a table's columns hold it, linearly: 1 along ``n0``, 0 at grazing (a
-    tilted boundary's closures turn with the view about ``n0``, so near normal view they vary with the angle,
-    not its cosine); ``cos_v``: the view's cosine to ``n0``, clamped."""
-    return 1.0 - ops.atan2(ops.length(v - n0 * ops.dot(v, n0)), cos_v) * (2.0 / math.pi)
+def view_column(ops, cos_v, scale, offset):
+    """``scale a + offset``, ``a`` the view's angle from ``n0`` as a table's columns hold it, linearly: 1 along
+    ``n0``, 0 at grazing (a tilted boundary's closures turn with the view about ``n0``, so near normal view they
+    vary with the angle, not its cosine); ``cos_v``: the view's cosine to ``n0``, clamped.  One node: the
+    angle's arc cosine, and the map onto the columns folded into one multiply-add (in single precision the
+    arc cosine of a cosine near 1 is off by 5e-4 radians at most: 0.04 of a column of 128)."""
+    return ops.madd(ops.acos(cos_v), -scale * 2.0 / math.pi, scale + offset)
 
 
 def texel_coordinates(ops, layout: TableLayout, P, root, d):
