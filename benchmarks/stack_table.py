@@ -6,8 +6,8 @@ paper's RGB) and tmm's spectrum at 1 nm seen under D65 (layered_brdf_reference/s
 preset and per stack size, the bake's CPU time (the process's, every thread's: a bake's points are split
 over the cores) and wall time (medians of ``--repeats``), its rows and bytes, and the tables' check against the stack computed per point (model/table_check.py: the light's L1, the share of
 highlights off by more than 2%, what passes to the base); then, per disordered stack, how far the model's
-8 draws (stratified) and 8 independent ones are from the average of 1024.  Prints aligned tables, markdown
-with ``--markdown``.
+8 draws (stratified), 8 independent ones and the partially coherent sums are from the average of 1024.
+Prints aligned tables, markdown with ``--markdown``.
 """
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ import numpy as np
 from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model import stack_optics as so
+from layered_brdf_addon.model.partial_coherence import DEEP_MODES, deep_start
 from layered_brdf_addon.model.presets import STACK_PRESETS, preset
 from layered_brdf_addon.model.table_bake import bake
 from layered_brdf_addon.model.table_check import check_tables
@@ -91,33 +92,48 @@ def _independent_draws(stack):
     return np.maximum(1.0 + stack.disorder * g, 0.05)
 
 
-def _mirror_colour(p, draws_fn, draws: int):
-    """The stack's mirror colour at ANGLES, scale 1, as the optics give it, averaged over ``draws``."""
+def _mirror_colour(p, draws_fn, draws: int, partial: str = ""):
+    """The stack's mirror colour at ANGLES, scale 1, as the optics give it, averaged over ``draws``
+    (``partial``: the deeper films' light added as power, :mod:`layered_brdf_addon.model.partial_coherence`)."""
     kept = so.disorder_draws, so.DISORDER_DRAWS
     so.disorder_draws, so.DISORDER_DRAWS = draws_fn, draws
     try:
         r = so.StackResponse.of(p)
         return so.stack_colour(p.stack, r.n0, r.lower_rgb, np.cos(np.radians(ANGLES)), np.ones(len(ANGLES)),
-                               "analytic", p.lower_medium, gamut=False)[0]
+                               "analytic", p.lower_medium, gamut=False, partial=partial)[0]
     finally:
         so.disorder_draws, so.DISORDER_DRAWS = kept
 
 
+def _errors(colour, reference) -> str:
+    e = rgb_delta_e(colour, reference)
+    return " / ".join(f"{x:.2f}" for x in e) + f" ({np.mean(e):.2f})"
+
+
+DRAWS_CASES = ((16, 0.05), (64, 0.05), (16, 0.2), (16, 0.4), (64, 0.2), (64, 0.4))
+
+
 def draws_rows() -> list[tuple]:
-    """Per disordered stack, CIEDE2000 at ANGLES of the model's 8 draws (stratified) and of 8 independent
-    ones from the average of DRAWS_REFERENCE stratified draws."""
+    """Per disordered stack, CIEDE2000 at ANGLES (and their mean) from the average of DRAWS_REFERENCE stratified
+    draws of the whole stack summed coherently: the model's 8 draws (stratified), 8 independent ones, and the
+    partially coherent sums of 8 draws (each of partial_coherence.DEEP_MODES; '-': the spread stays within
+    coherence, every film coherent)."""
     cases = [("nacre (5%)", preset("nacre"))] + [(f"Bragg {n} films, disorder {round(100 * d)}%", _sized(n, d))
-                                                 for n, d in ((16, 0.05), (64, 0.05), (16, 0.2), (16, 0.4))]
+                                                 for n, d in DRAWS_CASES]
     rows = []
     for name, p in cases:
         reference = _mirror_colour(p, so.disorder_draws, DRAWS_REFERENCE)
-        stratified = rgb_delta_e(_mirror_colour(p, so.disorder_draws, 8), reference)
-        independent = rgb_delta_e(_mirror_colour(p, _independent_draws, 8), reference)
-        rows.append((name, " / ".join(f"{x:.2f}" for x in stratified), " / ".join(f"{x:.2f}" for x in independent)))
+        row = [name, _errors(_mirror_colour(p, so.disorder_draws, 8), reference),
+               _errors(_mirror_colour(p, _independent_draws, 8), reference)]
+        for mode in DEEP_MODES:
+            deep = deep_start(p.stack, mode) < p.stack.count
+            row.append(_errors(_mirror_colour(p, so.disorder_draws, 8, mode), reference) if deep else "-")
+        rows.append(tuple(row))
     return rows
 
 
-DRAWS_HEADER = ("stack", "8 stratified draws (0 / 30 / 60°)", "8 independent draws")
+DRAWS_HEADER = ("stack", "8 stratified draws (0 / 30 / 60°, mean)", "8 independent draws",
+                *(f"partially coherent, {mode}" for mode in DEEP_MODES))
 
 BAKE_HEADER = ("stack", "films", "bake (s, CPU)", "bake (s, wall)", "rows", "KiB", "L1", "highlights off", "base")
 

@@ -17,11 +17,34 @@ import numpy as np
 FLOOR = 1.0e-9  # 1 - Ra Rb, at least (two perfect mirrors facing each other)
 
 
+def over_sides(upper, lower):
+    """``(R, T, R', T')`` of the slab ``upper`` over ``lower``, each given as ``(R, T, R', T')``: what it reflects
+    and passes of the light from above, then from below (an absorbing slab reflects differently from each
+    side).  From above, ``Ra + Ta T'a Rb / (1 - R'a Rb)`` and ``Ta Tb / (1 - R'a Rb)``; from below, ``R'b + T'b
+    Tb R'a / (1 - R'a Rb)`` and ``T'b T'a / (1 - R'a Rb)``: the light bouncing between them summed."""
+    Ra, Ta, Ra_below, Ta_below = upper
+    Rb, Tb, Rb_below, Tb_below = lower
+    inv = 1.0 / np.maximum(1.0 - Ra_below * Rb, FLOOR)
+    return (Ra + Ta * Ta_below * Rb * inv, Ta * Tb * inv, Rb_below + Tb_below * Tb * Ra_below * inv,
+            Tb_below * Ta_below * inv)
+
+
 def over(upper, lower):
-    """``(R, T)`` of the slab ``upper`` (symmetric) over ``lower``, their light added as power."""
+    """``(R, T)`` of the slab ``upper`` (symmetric) over ``lower``, their light added as power
+    (:func:`over_sides` with each slab the same from both sides)."""
     (Ra, Ta), (Rb, Tb) = upper, lower
-    inv = 1.0 / np.maximum(1.0 - Ra * Rb, FLOOR)
-    return Ra + Ta * Ta * Rb * inv, Ta * Tb * inv
+    return over_sides((Ra, Ta, Ra, Ta), (Rb, Tb, Rb, Tb))[:2]
+
+
+def repeated(cell, count: int, combine=over_sides):
+    """``count`` (at least 1) copies of the slab ``cell`` one under the other (``combine``: :func:`over_sides`
+    or :func:`over`), by doubling: ``log2 count`` combinations."""
+    above, power, n = None, cell, count
+    while n:
+        if n & 1:
+            above = power if above is None else combine(above, power)
+        power, n = combine(power, power), n >> 1
+    return above
 
 
 def _in_double(slab, clear: bool):
@@ -35,9 +58,4 @@ def pile(domain, last, count: int, clear=(False, False)):
     ``clear``: whether ``domain`` and ``last`` absorb nothing, so that what they pass is exactly what they do
     not reflect (a single-precision ``T`` off by 1e-5 would add up over many domains)."""
     domain, last = _in_double(domain, clear[0]), _in_double(last, clear[1])
-    above, power, n = None, domain, count - 1
-    while n:
-        if n & 1:
-            above = power if above is None else over(above, power)
-        power, n = over(power, power), n >> 1
-    return last if above is None else over(above, last)
+    return last if count == 1 else over(repeated(domain, count - 1, over), last)

@@ -16,7 +16,8 @@ lower medium (absorbed there where it absorbs), ``1 - R - T`` what the films abs
 
 A stack's ``disorder`` (:class:`.stack.FilmStack`) is averaged over :data:`DISORDER_DRAWS` stacks whose films'
 thicknesses are drawn with that relative spread, each film on its own (stratified, a fixed seed: the same
-stack bakes the same tables).  8 draws hold the average of many for spreads of a few percent, not tens.
+stack bakes the same tables).  8 draws hold the average of many for spreads of a few percent, not tens; the
+deeper films' light added as power (:mod:`.partial_coherence`) was measured against them and held less.
 
 Colour: :func:`channel_weights` turns a spectrum sampled over 380-780 nm (every 5 nm, finer where the
 films that interfere call for it, :func:`spectral_step`) into linear Rec.709 per channel (the CIE 1931
@@ -34,6 +35,7 @@ from statistics import NormalDist
 
 import numpy as np
 
+from .angle_nodes import ANGLE_NODES, NodeResponse  # noqa: F401 (the tables' bake reads them here)
 from .dispersion import abbe_index
 from .colour_gamut import within_gamut
 from .incoherent import pile
@@ -48,6 +50,7 @@ MIN_COS = 1.0e-6  # the most grazing outside cosine the optics take
 CHANNEL_NM = (645.0, 525.0, 445.0)  # the paper's three wavelengths (the 'rgb' accuracy)
 
 SAMPLES_PER_SPECTRAL_FRINGE = 8  # wavelengths per fringe of the whole stack at the bluest (no aliasing)
+DISORDERED_SAMPLES = 4  # per fringe for each draw of a disordered stack (the draws' wavelengths interleave)
 FINEST_STEP_NM = 0.5
 
 
@@ -68,15 +71,23 @@ def _channel_weights(step_nm: float, shift: float = 0.0) -> tuple[np.ndarray, np
     return lams, rgb
 
 
-def spectral_step(optical_nm: float) -> float:
+def spectral_step(optical_nm: float, samples: int = SAMPLES_PER_SPECTRAL_FRINGE) -> float:
     """The wavelength step (nm) that samples the fringes of a stack of optical thickness ``optical_nm``
-    (its largest ``n d``) :data:`SAMPLES_PER_SPECTRAL_FRINGE` times at 380 nm (a fringe is ``lambda^2 / (2 n
-    d)`` wide): 5 nm for thin stacks, down to :data:`FINEST_STEP_NM`."""
+    (its largest ``n d``) ``samples`` times at 380 nm (a fringe is ``lambda^2 / (2 n d)`` wide): 5 nm for thin
+    stacks, down to :data:`FINEST_STEP_NM`."""
     fringe = 380.0 ** 2 / (2.0 * max(optical_nm, 1e-9))
     for step in (5.0, 2.5, 1.25, 1.0, 0.5):
-        if step <= fringe / SAMPLES_PER_SPECTRAL_FRINGE or step == FINEST_STEP_NM:
+        if step <= fringe / samples or step == FINEST_STEP_NM:
             return step
     return FINEST_STEP_NM
+
+
+def colour_step(stack: FilmStack, largest_scale: float) -> float:
+    """The wavelength step of ``stack``'s colour at scales up to ``largest_scale``: :func:`spectral_step` of the
+    films that interfere (:func:`coherent_optical`), :data:`DISORDERED_SAMPLES` a fringe for each draw of a
+    disordered stack (each draw's wavelengths moved by its share of a step: 8 draws sample a fringe 32 times)."""
+    samples = DISORDERED_SAMPLES if stack.disorder else SAMPLES_PER_SPECTRAL_FRINGE
+    return spectral_step(largest_scale * coherent_optical(stack), samples)
 
 
 def channel_weights(accuracy: str = "analytic", step_nm: float = 5.0, shift: float = 0.0):
@@ -171,10 +182,12 @@ def _phase(q, d, k):
     times slower)."""
     s = d * k
     out = np.empty(np.broadcast_shapes(np.shape(q), np.shape(s)), dtype=np.complex64)
-    fade = np.exp(-(q.imag * s))
     angle = q.real * s
-    out.real = fade * np.cos(angle)
-    out.imag = fade * np.sin(angle)
+    out.real, out.imag = np.cos(angle), np.sin(angle)
+    if np.any(q.imag):  # a film that absorbs (e^{-0} is 1: a clear film's crossing skips it, the same values)
+        fade = np.exp(-(q.imag * s))
+        out.real *= fade
+        out.imag *= fade
     return out
 
 
@@ -308,14 +321,20 @@ COHERENCE_SPREAD_NM = 95.0  # optical thickness spread past which a disordered s
 # (a spread of ``n d`` of 95 nm spreads the round trip's phase by pi at 380 nm)
 
 
+def film_optical(film) -> float:
+    """A film's optical thickness (nm, ``n d`` at its highest index over the band)."""
+    return film.thickness_nm * float(np.max(film_index(film, SPECTRUM_NM).real))
+
+
 def coherent_optical(stack: FilmStack) -> float:
     """The optical thickness (nm, ``sum n d`` at scale 1) over which the stack's films interfere: the whole
     stack without disorder; with it, the films from the top until the spread of their optical thickness
-    passes :data:`COHERENCE_SPREAD_NM` (deeper films add their light as incoherent films do), at least one
-    period.  It sets how finely the stack's colour is sampled in wavelength and thickness."""
+    passes :data:`COHERENCE_SPREAD_NM` (deeper films add their light as incoherent films do,
+    :mod:`.partial_coherence`), at least one period.  It sets how finely the stack's colour is sampled in
+    wavelength and thickness."""
     total = spread = 0.0
     for k, f in enumerate(stack.layers):
-        optical = f.thickness_nm * float(np.max(film_index(f, SPECTRUM_NM).real))
+        optical = film_optical(f)
         spread += (optical * stack.disorder) ** 2
         if k >= len(stack.films) and spread > COHERENCE_SPREAD_NM ** 2:
             break
@@ -348,7 +367,7 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
 
 
 def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, accuracy: str = "analytic",
-                 lower_medium: str = "custom", gamut: bool = True, step_nm: float | None = None):
+                 lower_medium: str = "custom", gamut: bool = True, step_nm: float | None = None, partial: str = ""):
     """``(R, T)`` per channel, linear Rec.709 (..., 3), of ``stack`` at outside cosines ``cos0`` and
     scales ``scale`` (broadcasting), over a lower medium given per channel (``lower_rgb``: ``(r2, k2)``)
     or named; the colour as ``accuracy`` sees it (:func:`channel_weights`: 'rgb' the paper's three
@@ -359,23 +378,27 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
     mode's step follows the fringes of the films that interfere, :func:`coherent_optical`).  A colour outside
     Rec.709's gamut (a saturated Bragg peak) is held within it channel by channel, ``R`` in [0, 1] and ``T``
     in [0, 1 - R] (``gamut=False``: as the optics give it).  ``step_nm``: the wavelength step, where the caller
-    chose it for more points than these (:func:`spectral_step` of the largest scale otherwise)."""
+    chose it for more points than these (:func:`spectral_step` of the largest scale otherwise).  ``partial``: a
+    mode of :mod:`.partial_coherence`, the films below where the spread passes coherence adding their light as
+    power (measured against the coherent sum there; '': every film coherent in each draw)."""
     # Baked into tables, a stack's colour costs nothing per sample: every banded mode (analytic, spectralN)
     # sums the whole band finely; 'rgb' keeps the paper's three wavelengths.
     accuracy = "rgb" if accuracy == "rgb" else "analytic"
-    step = spectral_step(float(np.max(scale)) * coherent_optical(stack)) if step_nm is None else step_nm
-    draws = [None] if not stack.disorder else list(disorder_draws(stack))
-    R = T = 0.0
-    for k, draw in enumerate(draws):
-        shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
-        lams, weights = channel_weights(accuracy, step, shift)
-        lower = lower_index(lower_rgb[0], lower_rgb[1], lams, lower_medium)
-        r, t = stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
-        R, T = R + r @ weights, T + t @ weights
+    step = colour_step(stack, float(np.max(scale))) if step_nm is None else step_nm
+    from .partial_coherence import deep_start, partial_colour
+    if partial and stack.domains == 1 and deep_start(stack, partial) < stack.count:
+        R, T = partial_colour(stack, n0, lower_rgb, cos0, scale, accuracy, lower_medium, step, partial)
+    else:
+        draws, R, T = [None] if not stack.disorder else list(disorder_draws(stack)), 0.0, 0.0
+        for k, draw in enumerate(draws):
+            shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
+            lams, weights = channel_weights(accuracy, step, shift)
+            r, t = stack_spectra(stack, n0, lower_index(*lower_rgb, lams, lower_medium), cos0, scale, lams, draw)
+            R, T = R + r @ weights, T + t @ weights
+        R, T = R / len(draws), T / len(draws)
     # A saturated stack's colour can lie outside Rec.709 (a negative channel), which a closure's weight
     # cannot hold: each channel within [0, 1] (within_gamut), what the films absorb kept, and what passes
     # within what is not reflected.
-    R, T = R / len(draws), T / len(draws)
     if not gamut:  # the optics' own colour (compared with thin-film optics)
         return R, T
     absorbed = 1.0 - R - T
@@ -430,7 +453,7 @@ class StackResponse:
     def _computed(self, cosines, scales):
         """:func:`stack_colour` at ``cosines`` and ``scales``, both (N, 1) and (1, M) (a grid) or (P,) (pairs),
         the first axis split between the machine's cores (numpy lets go of Python's lock in its array loops)."""
-        step = spectral_step(float(np.max(scales)) * coherent_optical(self.stack))
+        step = colour_step(self.stack, float(np.max(scales)))
         grid = cosines.ndim == 2
         points = np.broadcast_shapes(cosines.shape, scales.shape)
         workers = max(1, min(os.cpu_count() or 1, int(np.prod(points)) // PAIRS_PER_THREAD, len(cosines)))
@@ -453,46 +476,3 @@ class StackResponse:
         d = np.asarray(d, dtype=float)
         R, T = self.colour(np.sqrt(cos2).reshape((-1,) + (1,) * d.ndim), d[None])
         return np.tensordot(0.5 * w, R, axes=(0, 0)), np.tensordot(0.5 * w, T, axes=(0, 0))
-
-
-ANGLE_NODES = 33  # cosines a disordered stack's optics are baked at (uniform in sqrt(cos), joined by cubics)
-
-
-class NodeResponse:
-    """A :class:`StackResponse` computed at :data:`ANGLE_NODES` cosines per thickness of ``rows`` and joined by
-    cubic Hermite curves in ``sqrt(cos)`` (Catmull-Rom slopes): what a table's grid needs at
-    a fraction of the cost, the stack's reflectance being smooth in the angle once summed over each channel's
-    band.  ``colour`` takes thicknesses of ``rows`` only."""
-
-    def __init__(self, response: StackResponse, rows, nodes: int = ANGLE_NODES):
-        self.response = response
-        self.rows = np.asarray(rows, dtype=float)
-        self.x = np.linspace(0.0, 1.0, nodes)
-        R, T = response.colour(self.x[:, None] ** 2, self.rows[None, :])  # (nodes, rows, 3)
-        self.R, self.T = R, T
-
-    def hemispherical(self, d):
-        return self.response.hemispherical(d)
-
-    def _at(self, values, x, row):
-        n = len(self.x) - 1
-        h = 1.0 / n
-        i = np.clip((x / h).astype(int), 0, n - 1)
-        t = (x - i * h) / h
-        y0, y1 = values[i, row], values[i + 1, row]
-        slopes = np.diff(values, axis=0) / h  # (n, rows, 3)
-        m = np.zeros_like(values)
-        m[1:-1] = 0.5 * (slopes[:-1] + slopes[1:])  # Catmull-Rom: a minimum keeps its curve
-        m[0], m[-1] = slopes[0], slopes[-1]
-        t = t[..., None]
-        h00, h10, h01, h11 = 2 * t ** 3 - 3 * t ** 2 + 1, t ** 3 - 2 * t ** 2 + t, -2 * t ** 3 + 3 * t ** 2, \
-            t ** 3 - t ** 2
-        return h00 * y0 + h10 * h * m[i, row] + h01 * y1 + h11 * h * m[i + 1, row]
-
-    def colour(self, cos0, d):
-        cos0, d = np.broadcast_arrays(np.asarray(cos0, dtype=float), np.asarray(d, dtype=float))
-        row = np.clip(np.searchsorted(self.rows, d), 0, len(self.rows) - 1)
-        if not np.allclose(self.rows[row], d, rtol=1e-9, atol=1e-6):
-            return self.response.colour(cos0, d)
-        x = np.sqrt(np.clip(cos0, 0.0, 1.0))
-        return self._at(self.R, x, row), self._at(self.T, x, row)
