@@ -147,9 +147,7 @@ def _lamella_geometry(pt, P, plan: EffectPlan, layout: LamellaLayout) -> np.ndar
     v, phi = v[:, 0], phi[:, 0]  # (H, W): rows the azimuths
     n0 = np.zeros_like(v)
     n0[..., 2] = 1.0
-    zero = np.zeros_like(phi)
-    axis = np.stack([-np.sin(phi), np.cos(phi), zero], axis=-1)
-    w = np.stack([np.cos(phi), np.sin(phi), zero], axis=-1)
+    axis, w = table_grid.azimuth_frame(phi)
     n1 = tilted_normal(pt, ops_numpy.vec(n0), ops_numpy.vec(axis), float(P["tilt"]))
     geo = lamella_geometry(pt, replace(plan, tables=False), P, ops_numpy.vec(n0), n1, ops_numpy.vec(v))
     normal = np.broadcast_to(np.asarray(geo["schiller"].normal, dtype=float), v.shape)

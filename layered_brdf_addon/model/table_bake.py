@@ -16,7 +16,7 @@ import numpy as np
 
 from . import ops_numpy, stack_tables
 from .table_grid import (MAX_TABLE_BYTES, MAX_THICKNESS_SAMPLES, MIN_THICKNESS_SAMPLES, SAMPLES_PER_FRINGE,
-                         SAMPLES_PER_HARMONIC_FRINGE, SHORTEST_NM, held_values, texel_grid as _grid)
+                         SAMPLES_PER_HARMONIC_FRINGE, SHORTEST_NM, azimuth_frame, held_values, texel_grid as _grid)
 from .ops_numpy import ShadingPoint
 from .params import WAVELENGTHS_NM, LayeredParams
 from .plan import EffectPlan
@@ -70,9 +70,8 @@ def _shade_grid(params: LayeredParams, plan: EffectPlan, width: int, height: int
     inputs = program_inputs(P)
     n0v, vv = ops_numpy.vec(n0), ops_numpy.vec(v)
     n1v = n0v
-    zero = np.zeros_like(phi)
-    axis = np.stack([-np.sin(phi), np.cos(phi), zero], axis=-1)
-    frame = (np.stack([np.cos(phi), np.sin(phi), zero], axis=-1), -axis, n0)
+    axis, w = azimuth_frame(phi)
+    frame = (w, -axis, n0)
     if plan.normals == "tilted":
         n1v = tilted_normal(pt, n0v, ops_numpy.vec(axis), float(P["tilt"]))
     res = shade(pt, inputs, n0v, n1v, d, vv, plan, WAVELENGTHS_NM)

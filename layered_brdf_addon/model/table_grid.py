@@ -32,6 +32,15 @@ def texel_grid(width: int, height: int, d_min, d_max, azimuths: int = 1):
     return v, d_min + (d_max - d_min) * T, A
 
 
+def azimuth_frame(phi):
+    """The frame a tilted boundary's texels are baked in, at the lower normal's azimuths ``phi`` (n0 = +z, the
+    view towards +x): the tilt axis ``t = (-sin phi, cos phi, 0)`` and ``w = t x n0 = (cos phi, sin phi, 0)``,
+    the lower normal's direction along the surface (:func:`.shading.tables.lower_frame`; the view lies on the
+    side of ``-t``, so ``b = -t``)."""
+    zero = np.zeros_like(phi)
+    return np.stack([-np.sin(phi), np.cos(phi), zero], axis=-1), np.stack([np.cos(phi), np.sin(phi), zero], axis=-1)
+
+
 def held_values(params: LayeredParams, backend: str, plan: EffectPlan | None = None) -> dict:
     """The shader's input values as the sockets of ``backend`` hold them (float32): what the shader reads,
     and what reading a material's sockets back gives again.  With ``plan``, only those it reads: a layer

@@ -204,11 +204,13 @@ def texel_coordinates(ops, layout: TableLayout, P, root, d):
 
 
 def _with_thickness(ops, layout: TableLayout, P, x, d):
+    """``x`` and the thickness's row coordinate: ``d``'s place in ``[d_min, d_max]`` on the rows' centres, as one
+    multiply-add of ``d`` (its factor and offset are the material's values only: Cycles folds them)."""
     h = layout.height
     if h == 1:
         return ops.combine(x, 0.5, 0.0)
-    t = (d - P["d_min"]) / (P["d_max"] - P["d_min"])
-    return ops.combine(x, ops.madd(t, (h - 1.0) / h, 0.5 / h), 0.0)
+    k = ((h - 1.0) / h) / (P["d_max"] - P["d_min"])
+    return ops.combine(x, ops.madd(d, k, 0.5 / h - P["d_min"] * k), 0.0)
 
 
 def lower_frame(ops, n0, v, t):
