@@ -16,9 +16,9 @@ from layered_brdf_addon.model.stack import FilmStack
 from layered_brdf_reference import thin_film
 from layered_brdf_reference.film_colours import rgb_to_lab
 
-INC_TMM_TOL = 0.05  # CIEDE2000 (measured: at most 0.018; the deep units averaged over the draws, then piled)
+INC_TMM_TOL = 0.05  # CIEDE2000 (measured: at most 0.027 against tmm every 4 nm, 0.018 every 2 nm)
 LOWER = ((1.63,) * 3, (0.0,) * 3)
-REFERENCE_NM = np.arange(380.0, 781.0, 2.0)
+REFERENCE_NM = np.arange(380.0, 781.0, 4.0)
 
 
 def _tablets(k: float) -> FilmStack:
