@@ -36,22 +36,11 @@ import numpy as np
 
 from .incoherent import over_sides, repeated
 from .stack import FilmStack
-from .stack_optics import (COHERENCE_SPREAD_NM, _interface, _media, _phase, _power_ratio, _star, _through,
-                           channel_weights, disorder_draws, film_index, film_optical, lower_index, reflect_transmit)
+from .stack_optics import (_interface, _media, _phase, _power_ratio, _star, _through, channel_weights,
+                           coherent_films, disorder_draws, film_index, film_optical, lower_index, reflect_transmit)
 
 
 DEEP_MODES = ("blocks", "periods", "films")  # where the deep part's gap films lie (this module's docs)
-
-
-def _cut(stack: FilmStack) -> int:
-    """The first film (of a layer below the first period) where the spread of the optical thickness from the top
-    passes :data:`.stack_optics.COHERENCE_SPREAD_NM`; ``stack.count`` where it never does."""
-    spread = 0.0
-    for j, f in enumerate(stack.layers):
-        spread += (film_optical(f) * stack.disorder) ** 2
-        if j >= len(stack.films) and spread > COHERENCE_SPREAD_NM ** 2:
-            return j
-    return stack.count
 
 
 def _gaps(stack: FilmStack, mode: str):
@@ -61,18 +50,18 @@ def _gaps(stack: FilmStack, mode: str):
     if mode == "films":
         return (lambda j: True), len(stack.films)
     widest = int(np.argmax([film_optical(f) for f in stack.films]))
-    every = len(stack.films) * (max(1, _cut(stack) // len(stack.films)) if mode == "blocks" else 1)
+    every = len(stack.films) * (max(1, coherent_films(stack) // len(stack.films)) if mode == "blocks" else 1)
     return (lambda j: j % every == widest % every), every
 
 
 def deep_start(stack: FilmStack, mode: str = "blocks") -> int:
     """The first deep layer (``stack.count``: none): the first gap film at or below the film where the spread
-    of the optical thickness from the top passes coherence (:func:`_cut`); a stack without disorder or of
-    one period keeps every film coherent."""
+    of the optical thickness from the top passes coherence (:func:`.stack_optics.coherent_films`); a stack
+    without disorder or of one period keeps every film coherent."""
     if not stack.disorder or stack.periods == 1:
         return stack.count
     gap = _gaps(stack, mode)[0]
-    return next((k for k in range(_cut(stack), stack.count) if gap(k)), stack.count)
+    return next((k for k in range(coherent_films(stack), stack.count) if gap(k)), stack.count)
 
 
 def _boundary(media, qs, a, b):

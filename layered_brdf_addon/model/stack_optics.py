@@ -326,20 +326,22 @@ def film_optical(film) -> float:
     return film.thickness_nm * float(np.max(film_index(film, SPECTRUM_NM).real))
 
 
-def coherent_optical(stack: FilmStack) -> float:
-    """The optical thickness (nm, ``sum n d`` at scale 1) over which the stack's films interfere: the whole
-    stack without disorder; with it, the films from the top until the spread of their optical thickness
-    passes :data:`COHERENCE_SPREAD_NM` (deeper films add their light as incoherent films do,
-    :mod:`.partial_coherence`), at least one period.  It sets how finely the stack's colour is sampled in
-    wavelength and thickness."""
-    total = spread = 0.0
+def coherent_films(stack: FilmStack) -> int:
+    """How many films from the top interfere: all without disorder; with it, those above the film where the
+    spread of their optical thickness passes :data:`COHERENCE_SPREAD_NM`, at least one period."""
+    spread = 0.0
     for k, f in enumerate(stack.layers):
-        optical = film_optical(f)
-        spread += (optical * stack.disorder) ** 2
+        spread += (film_optical(f) * stack.disorder) ** 2
         if k >= len(stack.films) and spread > COHERENCE_SPREAD_NM ** 2:
-            break
-        total += optical
-    return total
+            return k
+    return stack.count
+
+
+def coherent_optical(stack: FilmStack) -> float:
+    """The optical thickness (nm, ``sum n d`` at scale 1) of the films that interfere (:func:`coherent_films`;
+    deeper films add their light as incoherent films do, :mod:`.partial_coherence`).  It sets how finely the
+    stack's colour is sampled in wavelength and thickness."""
+    return sum(film_optical(f) for f in stack.layers[:coherent_films(stack)])
 
 
 def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, draw=None, polarised=False):
