@@ -20,7 +20,7 @@ import numpy as np
 from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.policy import plan_effects
 from layered_brdf_addon.model import stack_optics as so
-from layered_brdf_addon.model.partial_coherence import DEEP_MODES, deep_start
+from layered_brdf_addon.model.partial_coherence import DEEP_MODES, deep_start, stack_colour_partial
 from layered_brdf_addon.model.presets import STACK_PRESETS, preset
 from layered_brdf_addon.model.table_bake import bake
 from layered_brdf_addon.model.table_check import check_tables
@@ -99,8 +99,11 @@ def _mirror_colour(p, draws_fn, draws: int, partial: str = ""):
     so.disorder_draws, so.DISORDER_DRAWS = draws_fn, draws
     try:
         r = so.StackResponse.of(p)
-        return so.stack_colour(p.stack, r.n0, r.lower_rgb, np.cos(np.radians(ANGLES)), np.ones(len(ANGLES)),
-                               "analytic", p.lower_medium, gamut=False, partial=partial)[0]
+        cosines, scales = np.cos(np.radians(ANGLES)), np.ones(len(ANGLES))
+        if partial:
+            return stack_colour_partial(p.stack, r.n0, r.lower_rgb, cosines, scales, partial,
+                                        lower_medium=p.lower_medium)[0]
+        return so.stack_colour(p.stack, r.n0, r.lower_rgb, cosines, scales, "analytic", p.lower_medium, gamut=False)[0]
     finally:
         so.disorder_draws, so.DISORDER_DRAWS = kept
 

@@ -10,7 +10,7 @@ import tmm
 
 from layered_brdf_addon.model import stack_optics as so
 from layered_brdf_addon.model.incoherent import over, over_sides
-from layered_brdf_addon.model.partial_coherence import _gaps, deep_start, partial_colour
+from layered_brdf_addon.model.partial_coherence import _gaps, deep_start, partial_colour, stack_colour_partial
 from layered_brdf_addon.model.presets import preset
 from layered_brdf_addon.model.stack import FilmStack
 from layered_brdf_reference import thin_film
@@ -78,8 +78,8 @@ def test_a_stack_whose_spread_stays_within_coherence_is_summed_as_before():
     for stack in (ordered, bragg):
         for mode in ("blocks", "periods", "films"):
             assert deep_start(stack, mode) == stack.count
-            assert np.array_equal(so.stack_colour(stack, 1.0, LOWER, cosines, 1.0, partial=mode)[0],
-                                  so.stack_colour(stack, 1.0, LOWER, cosines, 1.0)[0])
+            assert np.array_equal(stack_colour_partial(stack, 1.0, LOWER, cosines, 1.0, mode)[0],
+                                  so.stack_colour(stack, 1.0, LOWER, cosines, 1.0, gamut=False)[0])
 
 
 # Mean CIEDE2000 at 0, 30 and 60 degrees from 1024 draws of nacre summed coherently (measured: the 8 coherent
@@ -96,7 +96,9 @@ def test_nacre_partially_coherent_against_the_average_of_many_draws():
         return float(np.mean(thin_film.delta_e_2000(rgb_to_lab(colour), rgb_to_lab(reference))))
 
     def colour(partial=""):
-        return so.stack_colour(p.stack, p.r0, (p.r2, p.k2), cosines, np.ones(3), gamut=False, partial=partial)[0]
+        if partial:
+            return stack_colour_partial(p.stack, p.r0, (p.r2, p.k2), cosines, np.ones(3), partial)[0]
+        return so.stack_colour(p.stack, p.r0, (p.r2, p.k2), cosines, np.ones(3), gamut=False)[0]
 
     kept = so.DISORDER_DRAWS
     so.DISORDER_DRAWS = 1024

@@ -7,6 +7,7 @@ import math
 
 import pytest
 
+from layered_brdf_addon.model import stack_tables
 from layered_brdf_addon.model.errors import ParameterError
 from layered_brdf_addon.model.params import LayeredParams
 from layered_brdf_addon.model.policy import plan_effects, render_plan
@@ -91,3 +92,11 @@ def test_the_tables_follow_the_stack():
     medium = p.replace(lower_medium="water")
     digests = {table_digest(q, plan) for q in (p, moved, medium)}
     assert len(digests) == 3
+
+
+def test_a_disordered_stacks_tables_follow_how_its_draws_sample_the_band(monkeypatch):
+    nacre, beetle = preset("nacre"), preset("jewel_beetle")
+    before = {name: table_digest(p, plan_effects(p)) for name, p in (("nacre", nacre), ("beetle", beetle))}
+    monkeypatch.setattr(stack_tables, "DISORDERED_SAMPLES", stack_tables.DISORDERED_SAMPLES * 2)
+    assert table_digest(nacre, plan_effects(nacre)) != before["nacre"]  # baked before: baked again
+    assert table_digest(beetle, plan_effects(beetle)) == before["beetle"]  # no disorder: no draws

@@ -37,7 +37,8 @@ import numpy as np
 from .incoherent import over_sides, repeated
 from .stack import FilmStack
 from .stack_optics import (_interface, _media, _phase, _power_ratio, _star, _through, channel_weights,
-                           coherent_films, disorder_draws, film_index, film_optical, lower_index, reflect_transmit)
+                           coherent_films, colour_step, disorder_draws, film_index, film_optical, lower_index,
+                           reflect_transmit, stack_colour)
 
 
 DEEP_MODES = ("blocks", "periods", "films")  # where the deep part's gap films lie (this module's docs)
@@ -165,3 +166,15 @@ def partial_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, a
         whole = over_sides(upper, deep if accuracy == "rgb" else _read(deep, grid, lams))
         R, T = R + 0.5 * (whole[0][0] + whole[0][1]) @ weights, T + 0.5 * (whole[1][0] + whole[1][1]) @ weights
     return R / len(draws), T / len(draws)
+
+
+def stack_colour_partial(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, mode: str,
+                         accuracy: str = "analytic", lower_medium: str = "custom"):
+    """``(R, T)`` per channel as the optics give them (no gamut) of ``stack`` with its films from
+    :func:`deep_start` down adding their light as power (``mode``); the coherent sum
+    (:func:`.stack_optics.stack_colour`) where no film is that deep, or the stack has domains."""
+    if stack.domains > 1 or deep_start(stack, mode) >= stack.count:
+        return stack_colour(stack, n0, lower_rgb, cos0, scale, accuracy, lower_medium, gamut=False)
+    accuracy = "rgb" if accuracy == "rgb" else "analytic"
+    step = colour_step(stack, float(np.max(scale)))
+    return partial_colour(stack, n0, lower_rgb, cos0, scale, accuracy, lower_medium, step, mode)

@@ -369,7 +369,7 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
 
 
 def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, accuracy: str = "analytic",
-                 lower_medium: str = "custom", gamut: bool = True, step_nm: float | None = None, partial: str = ""):
+                 lower_medium: str = "custom", gamut: bool = True, step_nm: float | None = None):
     """``(R, T)`` per channel, linear Rec.709 (..., 3), of ``stack`` at outside cosines ``cos0`` and
     scales ``scale`` (broadcasting), over a lower medium given per channel (``lower_rgb``: ``(r2, k2)``)
     or named; the colour as ``accuracy`` sees it (:func:`channel_weights`: 'rgb' the paper's three
@@ -380,24 +380,20 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
     mode's step follows the fringes of the films that interfere, :func:`coherent_optical`).  A colour outside
     Rec.709's gamut (a saturated Bragg peak) is held within it channel by channel, ``R`` in [0, 1] and ``T``
     in [0, 1 - R] (``gamut=False``: as the optics give it).  ``step_nm``: the wavelength step, where the caller
-    chose it for more points than these (:func:`spectral_step` of the largest scale otherwise).  ``partial``: a
-    mode of :mod:`.partial_coherence`, the films below where the spread passes coherence adding their light as
-    power (measured against the coherent sum there; '': every film coherent in each draw)."""
+    chose it for more points than these (:func:`spectral_step` of the largest scale otherwise).  Every film is
+    summed coherently in each draw (:mod:`.partial_coherence` adds the deeper films' light as power instead:
+    measured farther from the average of many draws)."""
     # Baked into tables, a stack's colour costs nothing per sample: every banded mode (analytic, spectralN)
     # sums the whole band finely; 'rgb' keeps the paper's three wavelengths.
     accuracy = "rgb" if accuracy == "rgb" else "analytic"
     step = colour_step(stack, float(np.max(scale))) if step_nm is None else step_nm
-    from .partial_coherence import deep_start, partial_colour
-    if partial and stack.domains == 1 and deep_start(stack, partial) < stack.count:
-        R, T = partial_colour(stack, n0, lower_rgb, cos0, scale, accuracy, lower_medium, step, partial)
-    else:
-        draws, R, T = [None] if not stack.disorder else list(disorder_draws(stack)), 0.0, 0.0
-        for k, draw in enumerate(draws):
-            shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
-            lams, weights = channel_weights(accuracy, step, shift)
-            r, t = stack_spectra(stack, n0, lower_index(*lower_rgb, lams, lower_medium), cos0, scale, lams, draw)
-            R, T = R + r @ weights, T + t @ weights
-        R, T = R / len(draws), T / len(draws)
+    draws, R, T = [None] if not stack.disorder else list(disorder_draws(stack)), 0.0, 0.0
+    for k, draw in enumerate(draws):
+        shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
+        lams, weights = channel_weights(accuracy, step, shift)
+        r, t = stack_spectra(stack, n0, lower_index(*lower_rgb, lams, lower_medium), cos0, scale, lams, draw)
+        R, T = R + r @ weights, T + t @ weights
+    R, T = R / len(draws), T / len(draws)
     # A saturated stack's colour can lie outside Rec.709 (a negative channel), which a closure's weight
     # cannot hold: each channel within [0, 1] (within_gamut), what the films absorb kept, and what passes
     # within what is not reflected.

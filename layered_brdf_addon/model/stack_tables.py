@@ -22,11 +22,10 @@ from .plan import EffectPlan
 from .shading.inputs import clamped_inputs
 from .shading.lamella_shade import AZIMUTH_ROWS, GEOMETRY_IMAGES, LAMELLA_IMAGES, lamella_geometry
 from .shading.surface_prelude import tilted_normal
-from .shading.tables import MIN_NORMAL_COS
 from .shading.stack_shade import stack_shade
-from .shading.tables import COS_SAMPLES, TableLayout
-from .stack_optics import (ANGLE_NODES, SPECTRUM_NM, NodeResponse, StackResponse, coherent_optical, film_index,
-                           lower_index)
+from .shading.tables import COS_SAMPLES, MIN_NORMAL_COS, TableLayout
+from .stack_optics import (ANGLE_NODES, DISORDERED_SAMPLES, SPECTRUM_NM, NodeResponse, StackResponse,
+                           coherent_optical, film_index, lower_index)
 
 
 
@@ -173,6 +172,10 @@ def absorbing(params: LayeredParams) -> bool:
 
 
 def stack_record(params: LayeredParams) -> dict:
-    """What a stack's tables depend on besides the sockets: the stack, and the lower medium by name (a named
-    one is read at every wavelength, not only at the channels')."""
-    return {"stack": params.stack.to_dict(), "lower_medium": params.lower_medium}
+    """What a stack's tables depend on besides the sockets: the stack, the lower medium by name (a named one is
+    read at every wavelength, not only at the channels'), and for a disordered stack how finely each draw
+    samples the band (tables baked with another sampling are baked again)."""
+    record = {"stack": params.stack.to_dict(), "lower_medium": params.lower_medium}
+    if params.stack.disorder:
+        record["disordered_samples"] = DISORDERED_SAMPLES
+    return record
