@@ -79,7 +79,8 @@ def test_a_stack_reads_tables_whatever_else_the_material_says(name):
         assert plan.stack and plan.tables and plan.key.endswith("TbM")
     assert plan_effects(p, {"ks"}).tables  # an animated value: the tables follow it frame by frame
     layout = table_layout(p, plan_effects(p))
-    if p.normal_mode == "tilted":  # clear lamellae: their optics (2 images: what they pass is what they do not reflect) and their geometry (3), not closures
+    if p.normal_mode == "tilted":  # clear lamellae: their optics (2 images: what they pass is what they do not
+        # reflect) and their geometry (3), not closures
         assert layout.closures == () and layout.images == 5 and layout.geometry_image == 2 and not layout.sliced
     else:
         assert [c for c, _ in layout.closures] == ["reflect"]

@@ -35,7 +35,6 @@ from statistics import NormalDist
 
 import numpy as np
 
-from .angle_nodes import ANGLE_NODES, NodeResponse  # noqa: F401 (the tables' bake reads them here)
 from .dispersion import abbe_index
 from .colour_gamut import within_gamut
 from .incoherent import pile

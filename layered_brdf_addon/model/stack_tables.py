@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import ops_numpy, table_grid
+from .angle_nodes import ANGLE_NODES, NodeResponse
 from .ops_numpy import ShadingPoint
 from .params import LayeredParams
 from .plan import EffectPlan
@@ -24,8 +25,7 @@ from .shading.lamella_shade import AZIMUTH_ROWS, GEOMETRY_IMAGES, LAMELLA_IMAGES
 from .shading.surface_prelude import tilted_normal
 from .shading.stack_shade import stack_shade
 from .shading.tables import COS_SAMPLES, MIN_NORMAL_COS, TableLayout
-from .stack_optics import (ANGLE_NODES, DISORDERED_SAMPLES, SPECTRUM_NM, NodeResponse, StackResponse,
-                           coherent_optical, film_index, lower_index)
+from .stack_optics import DISORDERED_SAMPLES, SPECTRUM_NM, StackResponse, coherent_optical, film_index, lower_index
 
 
 

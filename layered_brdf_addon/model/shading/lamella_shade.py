@@ -53,7 +53,8 @@ def lamella_geometry(ops, plan, P, n0, n1, v) -> dict:
     """What the view and the lamellae's normal ``n1`` decide, not the lamellae's optics: the top's gloss (a
     closure), the schiller's closure (its weight over ``R(c)``: ``weight``), the cosine ``cos`` to the
     lamellae, what of the schiller's light leaves through the top (``out``; the rest it sends back inside) and
-    what the top lets in, ``through`` (``1 - F(v)``, the top's reflectance ``F(v)``), under a top of normal ``n0``, view ``v``, the inputs ``P`` clamped (:func:`.inputs.clamped_inputs`)."""
+    what the top lets in, ``through`` (``1 - F(v)``, the top's reflectance ``F(v)``), under a top of normal
+    ``n0``, view ``v``, the inputs ``P`` clamped (:func:`.inputs.clamped_inputs`)."""
     r1, r0, e0, e1, ks = P["r1_g"], P["r0"], P["e0"], P["e1"], P["ks"]
     eta = r0 / r1
     lobes = channel_lobes(ops, r1, e0, e1, r0, n0, n1, v, plan.lobe, interference=False, energy=True)
