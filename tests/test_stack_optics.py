@@ -8,8 +8,8 @@ import pytest
 
 from layered_brdf_addon.model.presets import STACK_PRESETS, preset
 from layered_brdf_addon.model.stack import FilmStack
-from layered_brdf_addon.model.stack_optics import (SPECTRUM_NM, StackResponse, periodic_reflect_transmit,
-                                                   reflect_transmit, stack_colour)
+from layered_brdf_addon.model.stack_amplitudes import periodic_reflect_transmit, reflect_transmit
+from layered_brdf_addon.model.stack_optics import SPECTRUM_NM, StackResponse, stack_colour
 from layered_brdf_reference.stack_colours import stack_error
 from layered_brdf_reference.thin_film import stack_reflectance_transmittance
 

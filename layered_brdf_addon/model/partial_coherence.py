@@ -9,7 +9,7 @@ intensities, as in a pile of plates (Stokes; Born & Wolf §7.6; Katsidis & Siapk
 (2002): coherent and incoherent layers in one stack, which tmm's ``inc_tmm`` computes).  So:
 
 * the **top**, the films above where the spread of their optical thickness from the top passes coherence
-  (:func:`deep_start`), is summed coherently (:func:`.stack_optics.reflect_transmit`, or star products where
+  (:func:`deep_start`), is summed coherently (:func:`.stack_amplitudes.reflect_transmit`, or star products where
   it absorbs) for each of the stack's draws (:func:`.stack_optics.disorder_draws`);
 * the **deep** part below is a pile of slabs whose light adds as power, per wavelength and per polarisation
   (s and p piled apart): **gap** films, each an incoherent slab that passes ``|e^{i beta}|^2`` each way (its
@@ -36,9 +36,9 @@ import numpy as np
 
 from .incoherent import over_sides, repeated
 from .stack import FilmStack
-from .stack_optics import (_interface, _media, _phase, _power_ratio, _star, _through, channel_weights,
-                           coherent_films, colour_step, disorder_draws, film_index, film_optical, lower_index,
-                           reflect_transmit, stack_colour)
+from .stack_amplitudes import _interface, _media, _phase, _power_ratio, _star, _through, reflect_transmit
+from .stack_optics import (channel_weights, coherent_films, colour_step, disorder_draws, film_index, film_optical,
+                           lower_index, stack_colour)
 
 
 DEEP_MODES = ("blocks", "periods", "films")  # where the deep part's gap films lie (this module's docs)
@@ -74,7 +74,7 @@ def _boundary(media, qs, a, b):
 def _slab(media, qs, thicknesses, k):
     """``(R, T, R', T')`` per polarisation (s, p on a first axis, double precision) of the films between
     ``media[0]`` and ``media[-1]`` (``thicknesses``: one per film, broadcasting), summed coherently by
-    Redheffer star products (:func:`.stack_optics._star`: both sides at once)."""
+    Redheffer star products (:func:`.stack_amplitudes._star`: both sides at once)."""
     cell = _boundary(media, qs, 0, 1)
     for j in range(1, len(media) - 1):
         d = np.asarray(thicknesses[j - 1], dtype=np.float32)[..., None]

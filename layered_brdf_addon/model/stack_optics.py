@@ -1,18 +1,6 @@
-"""The optics of a film stack: reflectance and transmittance, exact for any number of films.
-
-Thin-film optics (Born & Wolf §1.6) for a stack between the outside medium (real index ``n0``)
-and the lower medium (complex ``n2 + i k2``), every film with its complex index ``n + i k`` per
-wavelength.  The reflection amplitude is summed from the bottom up (Rouard's method, the
-transfer-matrix product written as a recursion): with ``r_{j,j+1}`` and ``t_{j,j+1}`` the
-Fresnel amplitudes of the boundary under film ``j`` and ``beta_j = 2 pi n~_j d_j cos~_j / lambda``
-its phase thickness, ``r_j = (r_{j-1,j} + r_{j+1}' e^{2 i beta_j}) / (1 + r_{j-1,j} r_{j+1}' e^{2 i beta_j})``,
-and likewise the transmission amplitude.  ``Im beta_j >= 0`` (the root that decays into an
-absorbing film), so ``e^{2 i beta}`` never grows: films of ``k`` up to 10 and microns of thickness
-stay finite, where the product of transfer matrices overflows (:func:`reflect_transmit`, in single
-precision).  A periodic stack without disorder is its period combined with itself by Redheffer star
-products, ``log2(periods)`` of them (:func:`periodic_reflect_transmit`).  Reflectance and transmittance are
-the means of the s and p polarisations (unpolarised light); ``T`` is the power that enters the
-lower medium (absorbed there where it absorbs), ``1 - R - T`` what the films absorb.
+"""The optics of a film stack: reflectance and transmittance per wavelength and per channel, exact for any
+number of films (the amplitudes' sums: :mod:`.stack_amplitudes`), a disordered stack averaged over draws, and
+a material's stack as its shading reads it (:class:`StackResponse`).
 
 A stack's ``disorder`` (:class:`.stack.FilmStack`) is averaged over :data:`DISORDER_DRAWS` stacks whose films'
 thicknesses are drawn with that relative spread, each film on its own (stratified, a fixed seed: the same
@@ -40,12 +28,12 @@ from .colour_gamut import within_gamut
 from .incoherent import pile
 from .media import spectrum
 from .spectral_tables import observer, tables
+from .stack_amplitudes import _mean, periodic_reflect_transmit, reflect_transmit
 from .stack import FilmStack
 
 SPECTRUM_NM = np.arange(380.0, 781.0, 5.0)  # the band every 5 nm (where a film's highest index is looked up)
 DISORDER_DRAWS = 8  # stacks drawn to average a stack's disorder
 DISORDER_SEED = 20031  # their seed (the same stack, the same draws)
-MIN_COS = 1.0e-6  # the most grazing outside cosine the optics take
 CHANNEL_NM = (645.0, 525.0, 445.0)  # the paper's three wavelengths (the 'rgb' accuracy)
 
 SAMPLES_PER_SPECTRAL_FRINGE = 8  # wavelengths per fringe of the whole stack at the bluest (no aliasing)
@@ -130,176 +118,6 @@ def lower_index(r2, k2, wavelengths, medium: str = "custom") -> np.ndarray:
     n = np.maximum(_cauchy(r2, wavelengths), 0.01)
     k = np.maximum(_cauchy(k2, wavelengths), 0.0)
     return n + 1j * k
-
-
-def _cos_inside(n, n0_sin):
-    """``n cos theta`` inside a medium of complex index ``n`` for the invariant ``n0 sin theta0``:
-    the root with a non-negative imaginary part (the wave that decays, or leaves, downwards)."""
-    q = np.sqrt(n * n - n0_sin * n0_sin + 0j)
-    return np.where(q.imag < 0.0, -q, q)
-
-
-def _star(a, b):
-    """The scattering amplitudes ``(r, t, r', t')`` of sub-stack ``a`` over sub-stack ``b`` (Redheffer's
-    star product: the bounces between them summed), ``r``/``t`` for light from above, ``r'``/``t'`` from
-    below; stable where the amplitudes are at most 1 in size."""
-    ra, ta, rb_a, tb_a = a
-    rb, tb, rb_b, tb_b = b
-    inv = 1.0 / (1.0 - rb_a * rb)
-    return ra + ta * rb * tb_a * inv, ta * tb * inv, rb_b + tb_b * rb_a * tb * inv, tb_b * tb_a * inv
-
-
-def _power(cell, count: int):
-    """``cell`` star ``cell`` ... ``count`` times, by squaring (``log2 count`` products)."""
-    out = None
-    while count:
-        if count & 1:
-            out = cell if out is None else _star(out, cell)
-        count >>= 1
-        if count:
-            cell = _star(cell, cell)
-    return out
-
-
-def _interface(na, qa, nb, qb):
-    """Per polarisation (s, p), the amplitudes ``(r, t, r', t')`` of the boundary from a medium of index
-    ``na`` (``qa = na cos``) into one of ``nb``: Fresnel's, one division each.  ``r' = -r``, ``t = 1 + r``
-    and ``t' = 1 - r`` (s), ``t = (na / nb)(1 + r)`` and ``t' = (nb / na)(1 - r)`` (p, with
-    ``r = (nb^2 qa - na^2 qb) / (nb^2 qa + na^2 qb)``)."""
-    rs = (qa - qb) / (qa + qb)
-    a, b = nb * nb * qa, na * na * qb
-    rp = (a - b) / (a + b)
-    ratio = na / nb
-    s_ = (rs, 1.0 + rs, -rs, 1.0 - rs)
-    p_ = (rp, ratio * (1.0 + rp), -rp, (1.0 - rp) / ratio)
-    return [s_, p_]
-
-
-def _phase(q, d, k):
-    """``e^{i q d k}`` (a film's crossing: ``q = n cos`` complex, ``d`` its thickness, ``k = 2 pi / lambda``),
-    single precision, from real functions (``e^{-Im} (cos + i sin)``: numpy's complex exponential is several
-    times slower)."""
-    s = d * k
-    out = np.empty(np.broadcast_shapes(np.shape(q), np.shape(s)), dtype=np.complex64)
-    angle = q.real * s
-    out.real, out.imag = np.cos(angle), np.sin(angle)
-    if np.any(q.imag):  # a film that absorbs (e^{-0} is 1: a clear film's crossing skips it, the same values)
-        fade = np.exp(-(q.imag * s))
-        out.real *= fade
-        out.imag *= fade
-    return out
-
-
-def _through(cell, phase):
-    """``cell`` over a film's crossing (phase ``e^{i beta}`` each way, no bounce): ``cell`` star the film,
-    in a product's worth of multiplications."""
-    r, t, rb, tb = cell
-    phase2 = phase * phase
-    return r, t * phase, rb * phase2, tb * phase
-
-
-def _power_ratio(ts, tp, n0, q0, n2, q2, polarised=False):
-    """Unpolarised transmittance (the power into the lower medium) from the amplitudes (``polarised``: s, p)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        Ts = np.abs(ts) ** 2 * np.real(q2) / np.real(q0)
-        # p: the power ratio with the cosines conjugated (the amplitudes are of the electric field)
-        Tp = np.abs(tp) ** 2 * np.real(n2 * np.conj(q2 / n2)) / np.real(n0 * np.conj(q0 / n0))
-    return np.clip(np.nan_to_num(np.where(np.real(q0) > 0.0, _mean(np.stack([Ts, Tp]), polarised), 0.0)), 0.0, 1.0)
-
-
-def _mean(sp, polarised: bool):
-    """The mean of the s and p values on the first axis (unpolarised light), or both where ``polarised``."""
-    return sp if polarised else 0.5 * (sp[0] + sp[1])
-
-
-def _media(n0, indices, lower, cos0, lams):
-    # At exactly grazing light every boundary reflects all (|r| = 1) and the bounces' sum is 0 / 0: a
-    # millionth off grazing, the stack reflects all but a millionth.
-    c0 = np.clip(np.asarray(cos0, dtype=float), MIN_COS, 1.0)[..., None]
-    n0_sin = n0 * np.sqrt(1.0 - c0 * c0)
-    single = {}  # one single-precision array per index array (the films of a period share theirs)
-    media = [np.full(lams.shape, n0 + 0j, dtype=np.complex64)] + \
-        [single.setdefault(id(n), np.asarray(n, dtype=np.complex64)) for n in list(indices) + [lower]]
-    cosines = {}  # a medium's cosines, once for the films that share its index array
-    for n in media:
-        if id(n) not in cosines:
-            cosines[id(n)] = _cos_inside(n.astype(complex), n0_sin).astype(np.complex64)  # grazing kept off 0
-    return media, [cosines[id(n)] for n in media]
-
-
-def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths, polarised=False):
-    """Unpolarised ``(R, T)`` of a stack, broadcast over ``cos0`` (the outside cosines, any shape ``S``)
-    and ``wavelengths`` (shape ``(L,)``): arrays of shape ``S + (L,)``.
-
-    ``indices``: one complex array (L,) per film, top first; ``thicknesses``: one thickness (nm) per
-    film, each a number or an array broadcasting with ``S`` (a stack scaled point by point);
-    ``lower``: the lower medium's complex index (L,); ``polarised``: s and p on a first axis."""
-    lams = np.asarray(wavelengths, dtype=float)
-    media, qs = _media(n0, indices, lower, cos0, lams)
-    # The sum runs in single precision (the films' many steps at half the cost; R within 1e-4 of double), both
-    # polarisations at once (s and p on a first axis: each film's phase computed once for both)
-    bounds, seen = [], {}
-    for j in range(len(media) - 1):  # each pair's boundary once (a period's films repeat)
-        pair = (id(media[j]), id(media[j + 1]))
-        if pair not in seen:
-            (rs, ts, _, _), (rp, tp, _, _) = _interface(media[j], qs[j], media[j + 1], qs[j + 1])
-            seen[pair] = (np.stack(np.broadcast_arrays(rs, rp)), np.stack(np.broadcast_arrays(ts, tp)))
-        bounds.append(seen[pair])
-    # Where nothing absorbs, what is not reflected passes (R + T = 1): the transmitted amplitude is not summed
-    lossless = not any(np.any(m.imag) for m in media)
-    k = (2.0 * np.pi / lams).astype(np.float32)
-    r, t = bounds[-1]
-    for j in range(len(media) - 2, 0, -1):  # film j (media[j]), from the bottom up
-        d = np.asarray(thicknesses[j - 1], dtype=np.float32)[..., None]
-        phase = _phase(qs[j], d, k)  # e^{i beta}, |.| <= 1
-        phase2 = phase * phase
-        rb, tb = bounds[j - 1]
-        inv = 1.0 / (1.0 + rb * r * phase2)
-        if not lossless:
-            t = tb * t * phase * inv
-        r = (rb + r * phase2) * inv
-    R = np.clip(_mean(np.abs(r) ** 2, polarised), 0.0, 1.0)
-    if lossless:
-        return R, 1.0 - R
-    return R, _power_ratio(t[0], t[1], media[0], qs[0], media[-1], qs[-1], polarised)
-
-
-def periodic_reflect_transmit(n0: float, indices, thicknesses, periods: int, lower, cos0, wavelengths,
-                              polarised=False):
-    """:func:`reflect_transmit` of a period of films (``indices``, ``thicknesses``) repeated ``periods``
-    times, at the cost of ``log2 periods`` star products: the period as a cell in the first film's medium
-    (through each film and across each boundary, back into the first film), raised to the power of the
-    periods; the stack is the outside's boundary into the first film, the cells, and the first film's
-    boundary into the lower medium (a film of no thickness changes nothing)."""
-    lams = np.asarray(wavelengths, dtype=float)
-    media, qs = _media(n0, indices, lower, cos0, lams)
-    films = len(indices)
-    # In single precision, as reflect_transmit: each boundary once, for both polarisations
-    single = [q.astype(np.complex64) for q in qs]
-    index = [m.astype(np.complex64) for m in media]
-    k = (2.0 * np.pi / lams).astype(np.float32)
-
-    def boundary(a, b):
-        return _interface(index[a], single[a], index[b], single[b])
-
-    crossings = [_phase(single[j], np.asarray(thicknesses[j - 1], dtype=np.float32)[..., None], k)
-                 for j in range(1, films + 1)]
-    inner = [boundary(j, j + 1 if j < films else 1) for j in range(1, films + 1)]  # the last into the next period
-    top, bottom = boundary(0, 1), boundary(1, len(media) - 1)
-    out = []
-    for pol in (0, 1):  # s, p
-        cell = None
-        for j in range(1, films + 1):
-            phase = crossings[j - 1]
-            cell = (np.zeros_like(phase), phase, np.zeros_like(phase), phase) if cell is None else \
-                _through(cell, phase)
-            if films > 1 or j != 1:  # a period of one film has no boundary within it
-                cell = _star(cell, inner[j - 1][pol])
-        stack = _star(_star(top[pol], _power(cell, periods)), bottom[pol])
-        out.append(stack)
-    (rs, ts, _, _), (rp, tp, _, _) = out
-    R = _mean(np.stack([np.abs(rs) ** 2, np.abs(rp) ** 2]), polarised)
-    return np.clip(R, 0.0, 1.0), _power_ratio(ts, tp, media[0], qs[0], media[-1], qs[-1], polarised)
 
 
 def disorder_draws(stack: FilmStack) -> np.ndarray:
