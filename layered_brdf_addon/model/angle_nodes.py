@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .stack_optics import hemispherical_mean
+
 ANGLE_NODES = 33  # cosines a disordered stack's optics are baked at (uniform in sqrt(cos), joined by cubics)
 
 
@@ -27,7 +29,8 @@ class NodeResponse:
         self.R, self.T = R, T
 
     def hemispherical(self, d):
-        return self.response.hemispherical(d)
+        """The hemisphere's mean from the cubics (at thicknesses of ``rows``: no optics computed again)."""
+        return hemispherical_mean(self.colour, d)
 
     def _at(self, values, x, row):
         n = len(self.x) - 1

@@ -185,8 +185,9 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths, 
             (rs, ts, _, _), (rp, tp, _, _) = _interface(media[j], qs[j], media[j + 1], qs[j + 1])
             seen[pair] = (np.stack(np.broadcast_arrays(rs, rp)), np.stack(np.broadcast_arrays(ts, tp)))
         bounds.append(seen[pair])
-    # Where nothing absorbs, what is not reflected passes (R + T = 1): the transmitted amplitude is not summed
-    lossless = not any(np.any(m.imag) for m in media)
+    # Where no film absorbs, what is not reflected enters the lower medium (R + T = 1, whether or not it absorbs
+    # there): the transmitted amplitude is not summed
+    lossless = not any(np.any(m.imag) for m in media[:-1])
     k = (2.0 * np.pi / lams).astype(np.float32)
     thick = [np.asarray(x, dtype=float)[..., None] for x in thicknesses]
     shape = (2,) + np.broadcast_shapes(bounds[-1][0].shape[1:], qs[1].shape, *(x.shape for x in thick))

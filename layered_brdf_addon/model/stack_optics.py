@@ -161,6 +161,12 @@ def coherent_optical(stack: FilmStack) -> float:
     return sum(film_optical(f) for f in stack.layers[:coherent_films(stack)])
 
 
+def films_absorb(stack: FilmStack, wavelengths=SPECTRUM_NM) -> bool:
+    """Whether a film of ``stack`` absorbs at any of ``wavelengths`` (else the stack passes into the medium under
+    it exactly what it does not reflect)."""
+    return any(bool(np.any(film_index(f, wavelengths).imag > 0.0)) for f in stack.films)
+
+
 def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, draw=None, polarised=False):
     """``(R, T)`` of ``stack`` scaled by ``scale`` (broadcasting with ``cos0``) at ``wavelengths``: arrays of
     shape ``broadcast(cos0, scale) + (L,)``; ``draw``: the films' thickness factors of one draw of its
@@ -169,7 +175,7 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
     lams = np.asarray(wavelengths, dtype=float)
     if stack.domains > 1:
         one, around = replace(stack, domains=1), np.full(lams.shape, n0 + 0j)
-        clear = not any(np.any(film_index(f, lams).imag) for f in stack.films)  # then what is not reflected passes
+        clear = not films_absorb(stack, lams)  # then what is not reflected passes
         domain = stack_spectra(one, n0, around, cos0, scale, lams, draw, True)
         last = domain if np.allclose(lower, around) else stack_spectra(one, n0, lower, cos0, scale, lams, draw, True)
         R, T = pile(domain, last, stack.domains, (clear, clear and not np.any(np.imag(lower))))
@@ -286,8 +292,14 @@ class StackResponse:
     def hemispherical(self, d):
         """``(R, T)`` averaged over the hemisphere, cosine-weighted (what light scattered under the stack
         meets on its way out), per channel (..., 3) at thicknesses ``d``."""
-        x, w = np.polynomial.legendre.leggauss(HEMISPHERE_NODES)
-        cos2 = 0.5 * (x + 1.0)  # uniform in cos^2: the cosine weight
-        d = np.asarray(d, dtype=float)
-        R, T = self.colour(np.sqrt(cos2).reshape((-1,) + (1,) * d.ndim), d[None])
-        return np.tensordot(0.5 * w, R, axes=(0, 0)), np.tensordot(0.5 * w, T, axes=(0, 0))
+        return hemispherical_mean(self.colour, d)
+
+
+def hemispherical_mean(colour, d):
+    """``colour(cos0, d)``'s ``(R, T)`` averaged over the hemisphere, cosine-weighted, at thicknesses ``d``:
+    Gauss-Legendre in ``cos^2`` (:data:`HEMISPHERE_NODES` cosines)."""
+    x, w = np.polynomial.legendre.leggauss(HEMISPHERE_NODES)
+    cos2 = 0.5 * (x + 1.0)  # uniform in cos^2: the cosine weight
+    d = np.asarray(d, dtype=float)
+    R, T = colour(np.sqrt(cos2).reshape((-1,) + (1,) * d.ndim), d[None])
+    return np.tensordot(0.5 * w, R, axes=(0, 0)), np.tensordot(0.5 * w, T, axes=(0, 0))

@@ -25,7 +25,8 @@ from .shading.lamella_shade import AZIMUTH_ROWS, GEOMETRY_IMAGES, LAMELLA_IMAGES
 from .shading.surface_prelude import tilted_normal
 from .shading.stack_shade import stack_shade
 from .shading.tables import COS_SAMPLES, MIN_NORMAL_COS, TableLayout
-from .stack_optics import DISORDERED_SAMPLES, SPECTRUM_NM, StackResponse, coherent_optical, film_index, lower_index
+from .stack_optics import (DISORDERED_SAMPLES, SPECTRUM_NM, StackResponse, coherent_optical, films_absorb,
+                           lower_index)
 
 
 
@@ -166,9 +167,8 @@ def _lamella_geometry(pt, P, plan: EffectPlan, layout: LamellaLayout) -> np.ndar
 def absorbing(params: LayeredParams) -> bool:
     """Whether a film of ``params``'s stack, or its lower medium, absorbs anywhere in the visible: else the
     stack passes exactly what it does not reflect."""
-    films = any(np.any(film_index(f, SPECTRUM_NM).imag > 0.0) for f in params.stack.films)
     lower = lower_index(params.r2, params.k2, SPECTRUM_NM, params.lower_medium)
-    return bool(films or np.any(np.imag(lower) > 0.0))
+    return films_absorb(params.stack) or bool(np.any(np.imag(lower) > 0.0))
 
 
 def stack_record(params: LayeredParams) -> dict:
