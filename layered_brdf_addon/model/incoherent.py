@@ -33,7 +33,8 @@ def over(upper, lower):
     """``(R, T)`` of the slab ``upper`` (symmetric) over ``lower``, their light added as power
     (:func:`over_sides` with each slab the same from both sides)."""
     (Ra, Ta), (Rb, Tb) = upper, lower
-    return over_sides((Ra, Ta, Ra, Ta), (Rb, Tb, Rb, Tb))[:2]
+    inv = 1.0 / np.maximum(1.0 - Ra * Rb, FLOOR)
+    return Ra + Ta * Ta * Rb * inv, Ta * Tb * inv
 
 
 def repeated(cell, count: int, combine=over_sides):
@@ -43,7 +44,9 @@ def repeated(cell, count: int, combine=over_sides):
     while n:
         if n & 1:
             above = power if above is None else combine(above, power)
-        power, n = combine(power, power), n >> 1
+        n >>= 1
+        if n:
+            power = combine(power, power)
     return above
 
 
