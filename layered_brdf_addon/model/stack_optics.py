@@ -16,6 +16,7 @@ within the gamut by :func:`within_gamut`.  numpy; no bpy.
 from __future__ import annotations
 
 import functools
+import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
@@ -191,6 +192,38 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
                             polarised)
 
 
+SCALE_FREE_SAMPLES = 32  # samples per fringe of thickness over wavelength (linear between them: 0.5% of a fringe)
+
+
+def _constant(index) -> bool:
+    return bool(np.ptp(np.real(index)) == 0.0 and np.ptp(np.imag(index)) == 0.0)
+
+
+def grid_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, draw=None):
+    """:func:`stack_spectra` on a grid of cosines ``(C, 1)`` and scales ``(1, M)``.  Where neither a film nor the
+    lower medium disperses, a film's phase and every boundary's amplitudes depend on the scale over the wavelength
+    only: the stack is computed at one wavelength along :data:`SCALE_FREE_SAMPLES` values of ``s / lambda`` a
+    fringe of the whole stack and read, linearly between them, at every scale and wavelength (labradorite's
+    tables: 870 values of ``s / lambda`` where its rows and wavelengths make 33,000 pairs)."""
+    lams = np.asarray(wavelengths, dtype=float)
+    cos0, scale = np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float)
+    factors = np.ones(stack.count) if draw is None else np.asarray(draw)
+    optical = sum(f.thickness_nm * x * float(np.max(np.abs(film_index(f, lams)))) for f, x in zip(stack.layers,
+                                                                                                    factors))
+    lo, hi = float(np.min(scale)) / lams.max(), float(np.max(scale)) / lams.min()
+    count = max(math.ceil((hi - lo) * 2.0 * optical * SCALE_FREE_SAMPLES) + 2, 2)
+    grid = cos0.ndim == 2 and scale.ndim == 2 and cos0.shape[1] == 1 and scale.shape[0] == 1
+    if not (grid and count < scale.size * lams.size and _constant(lower)
+            and all(_constant(film_index(f, lams)) for f in stack.films)):
+        return stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
+    u = np.linspace(lo, hi, count)
+    R, T = stack_spectra(stack, n0, lower[:1], cos0, (u * lams[0])[None, :], lams[:1], draw)  # (C, U, 1)
+    at = (scale[0][:, None] / lams[None, :] - lo) / (u[1] - u[0])  # (M, L): where each pair's s / lambda lies
+    i = np.clip(at.astype(int), 0, count - 2)
+    w = np.clip(at - i, 0.0, 1.0)
+    return tuple(x[..., 0][:, i] * (1.0 - w) + x[..., 0][:, i + 1] * w for x in (R, T))
+
+
 def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, accuracy: str = "analytic",
                  lower_medium: str = "custom", gamut: bool = True, step_nm: float | None = None):
     """``(R, T)`` per channel, linear Rec.709 (..., 3), of ``stack`` at outside cosines ``cos0`` and
@@ -214,7 +247,7 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
     for k, draw in enumerate(draws):
         shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
         lams, weights = channel_weights(accuracy, step, shift)
-        r, t = stack_spectra(stack, n0, lower_index(*lower_rgb, lams, lower_medium), cos0, scale, lams, draw)
+        r, t = grid_spectra(stack, n0, lower_index(*lower_rgb, lams, lower_medium), cos0, scale, lams, draw)
         R, T = R + r @ weights, T + t @ weights
     R, T = R / len(draws), T / len(draws)
     # A saturated stack's colour can lie outside Rec.709 (a negative channel), which a closure's weight
