@@ -192,36 +192,54 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
                             polarised)
 
 
-SCALE_FREE_SAMPLES = 32  # samples per fringe of thickness over wavelength (linear between them: 0.5% of a fringe)
+SCALE_FREE_SAMPLES = 32  # values of s / lambda a fringe (linear between them: 0.5% of a fringe), and wavelengths
+# as finely in the phase the media's dispersion moves
+LEAST_WAVELENGTH_NODES = 5  # wavelengths a stack whose media disperse is computed at, at least (every 100 nm)
 
 
-def _constant(index) -> bool:
-    return bool(np.ptp(np.real(index)) == 0.0 and np.ptp(np.imag(index)) == 0.0)
+def _spread(index) -> float:
+    return float(np.ptp(np.real(index)) + np.ptp(np.imag(index)))
 
 
 def grid_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, draw=None):
-    """:func:`stack_spectra` on a grid of cosines ``(C, 1)`` and scales ``(1, M)``.  Where neither a film nor the
-    lower medium disperses, a film's phase and every boundary's amplitudes depend on the scale over the wavelength
-    only: the stack is computed at one wavelength along :data:`SCALE_FREE_SAMPLES` values of ``s / lambda`` a
-    fringe of the whole stack and read, linearly between them, at every scale and wavelength (labradorite's
-    tables: 881 values of ``s / lambda`` where its 102 rows and 400 wavelengths make 40,800 pairs)."""
+    """:func:`stack_spectra` on a grid of cosines ``(C, 1)`` and scales ``(1, M)``, read from the stack computed
+    along ``u = s / lambda``.  A film's phase is ``2 pi u`` times its ``n d cos``, and every boundary's amplitudes
+    depend on the media's indices only: where neither a film nor the lower medium disperses, the stack at one
+    wavelength along :data:`SCALE_FREE_SAMPLES` values of ``u`` a fringe of the whole stack holds every scale
+    and wavelength, read linearly between them (labradorite's tables: 881 values of ``u`` where its 102 rows and
+    400 wavelengths make 40,800 pairs).  Where they disperse, the stack is computed so at a few wavelengths
+    (:data:`LEAST_WAVELENGTH_NODES`, more where the films' indices move their phase by more than a
+    :data:`SCALE_FREE_SAMPLES`-th of a fringe between two) and read linearly between those too.  Every pair on its
+    own where that would cost less (a few scales, or films that disperse strongly)."""
     lams = np.asarray(wavelengths, dtype=float)
     cos0, scale = np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float)
+    grid = cos0.ndim == 2 and scale.ndim == 2 and cos0.shape[1] == 1 and scale.shape[0] == 1 and lams.size > 1
+    if not grid:
+        return stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
     factors = np.ones(stack.count) if draw is None else np.asarray(draw)
-    optical = sum(f.thickness_nm * x * float(np.max(np.abs(film_index(f, lams)))) for f, x in zip(stack.layers,
-                                                                                                    factors))
+    index = {f: film_index(f, lams) for f in stack.films}
+    optical = sum(f.thickness_nm * x * float(np.max(np.abs(index[f]))) for f, x in zip(stack.layers, factors))
+    moved = sum(f.thickness_nm * x * _spread(index[f]) for f, x in zip(stack.layers, factors))  # nm of n d
     lo, hi = float(np.min(scale)) / lams.max(), float(np.max(scale)) / lams.min()
     count = max(math.ceil((hi - lo) * 2.0 * optical * SCALE_FREE_SAMPLES) + 2, 2)
-    grid = cos0.ndim == 2 and scale.ndim == 2 and cos0.shape[1] == 1 and scale.shape[0] == 1
-    if not (grid and count < scale.size * lams.size and _constant(lower)
-            and all(_constant(film_index(f, lams)) for f in stack.films)):
+    nodes = 1 if moved == 0.0 and _spread(lower) == 0.0 else \
+        max(math.ceil(2.0 * hi * moved * SCALE_FREE_SAMPLES) + 1, LEAST_WAVELENGTH_NODES)
+    if 2 * count * nodes >= scale.size * lams.size:  # half the pairs at most (each wavelength a call of its own)
         return stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
     u = np.linspace(lo, hi, count)
-    R, T = stack_spectra(stack, n0, lower[:1], cos0, (u * lams[0])[None, :], lams[:1], draw)  # (C, U, 1)
+    coarse = np.linspace(lams.min(), lams.max(), nodes) if nodes > 1 else lams[:1]
+    below = np.interp(coarse, lams, np.real(lower)) + 1j * np.interp(coarse, lams, np.imag(lower))
+    computed = [stack_spectra(stack, n0, below[k:k + 1], cos0, (u * lam)[None, :], coarse[k:k + 1], draw)
+                for k, lam in enumerate(coarse)]  # each (C, U, 1)
+    R, T = (np.concatenate([c[j] for c in computed * (2 if nodes == 1 else 1)], axis=-1) for j in (0, 1))
     at = (scale[0][:, None] / lams[None, :] - lo) / (u[1] - u[0])  # (M, L): where each pair's s / lambda lies
     i = np.clip(at.astype(int), 0, count - 2)
     w = np.clip(at - i, 0.0, 1.0)
-    return tuple(x[..., 0][:, i] * (1.0 - w) + x[..., 0][:, i + 1] * w for x in (R, T))
+    along = np.zeros(lams.shape) if nodes == 1 else (lams - coarse[0]) / (coarse[1] - coarse[0])
+    k = np.clip(along.astype(int), 0, R.shape[-1] - 2)[None, :]
+    v = np.clip(along[None, :] - k, 0.0, 1.0)
+    return tuple((x[:, i, k] * (1.0 - w) + x[:, i + 1, k] * w) * (1.0 - v) +
+                 (x[:, i, k + 1] * (1.0 - w) + x[:, i + 1, k + 1] * w) * v for x in (R, T))
 
 
 def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, accuracy: str = "analytic",
