@@ -195,27 +195,58 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
 SCALE_FREE_SAMPLES = 32  # values of s / lambda a fringe (linear between them: 0.5% of a fringe), and wavelengths
 # as finely in the phase the media's dispersion moves
 LEAST_WAVELENGTH_NODES = 5  # wavelengths a stack whose media disperse is computed at, at least (every 100 nm)
+CALL_POINTS = 4096  # points whose sums cost what a sum's numpy calls cost (each wavelength computed is a sum)
 
 
 def _spread(index) -> float:
     return float(np.ptp(np.real(index)) + np.ptp(np.imag(index)))
 
 
-def grid_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, draw=None):
-    """:func:`stack_spectra` on a grid of cosines ``(C, 1)`` and scales ``(1, M)``, read from the stack computed
-    along ``u = s / lambda``.  A film's phase is ``2 pi u`` times its ``n d cos``, and every boundary's amplitudes
-    depend on the media's indices only: where neither a film nor the lower medium disperses, the stack at one
-    wavelength along :data:`SCALE_FREE_SAMPLES` values of ``u`` a fringe of the whole stack holds every scale
-    and wavelength, read linearly between them (labradorite's tables: 881 values of ``u`` where its 102 rows and
-    400 wavelengths make 40,800 pairs).  Where they disperse, the stack is computed so at a few wavelengths
-    (:data:`LEAST_WAVELENGTH_NODES`, more where the films' indices move their phase by more than a
-    :data:`SCALE_FREE_SAMPLES`-th of a fringe between two) and read linearly between those too.  Every pair on its
-    own where that would cost less (a few scales, or films that disperse strongly)."""
+def grid_colour(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, weights, draw=None):
+    """``(R, T)`` per channel, ``spectrum @ weights`` (``weights``: (L, 3)), of :func:`stack_spectra` on a grid of
+    cosines ``(C, 1)`` and scales ``(1, M)``, from the stack computed along ``u = s / lambda``.  A film's phase is
+    ``2 pi u`` times its ``n d cos``, and every boundary's amplitudes depend on the media's indices only: where
+    neither a film nor the lower medium disperses, the stack at one wavelength along :data:`SCALE_FREE_SAMPLES`
+    values of ``u`` a fringe of the whole stack holds every scale and wavelength, read linearly between them
+    (labradorite's tables: 881 values of ``u`` where its 102 rows and 400 wavelengths make 40,800 pairs).  Where
+    they disperse, the stack is computed so at a few wavelengths (:data:`LEAST_WAVELENGTH_NODES`, more where the
+    films' indices move their phase by more than a :data:`SCALE_FREE_SAMPLES`-th of a fringe between two) and
+    read linearly between those too.  The readings and the band's weights are one matrix per wavelength computed
+    (``u`` to each scale's channels).  Every pair on its own where that would cost more (a few scales, or films
+    that disperse strongly)."""
     lams = np.asarray(wavelengths, dtype=float)
     cos0, scale = np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float)
     grid = cos0.ndim == 2 and scale.ndim == 2 and cos0.shape[1] == 1 and scale.shape[0] == 1 and lams.size > 1
-    if not grid:
-        return stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
+    plan = _along_u(stack, lower, cos0.shape[0], scale, lams, draw) if grid else None
+    if plan is None:
+        r, t = stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
+        return r @ weights, t @ weights
+    u, coarse = plan
+    below = np.interp(coarse, lams, np.real(lower)) + 1j * np.interp(coarse, lams, np.imag(lower))
+    rows = scale.shape[1]
+    at = (scale[0][:, None] / lams[None, :] - u[0]) / (u[1] - u[0])  # (M, L): where each pair's s / lambda lies
+    i = np.clip(at.astype(int), 0, len(u) - 2)
+    w = np.clip(at - i, 0.0, 1.0)
+    along = np.zeros(lams.shape) if len(coarse) == 1 else (lams - coarse[0]) / (coarse[1] - coarse[0])
+    k = np.clip(along.astype(int), 0, max(len(coarse) - 2, 0))
+    v = np.clip(along - k, 0.0, 1.0)
+    out = [np.zeros(cos0.shape[:1] + (rows, 3)), np.zeros(cos0.shape[:1] + (rows, 3))]
+    for node, lam in enumerate(coarse):
+        share = np.where(k == node, 1.0 - v, 0.0) + np.where(k + 1 == node, v, 0.0)  # (L,): this wavelength's part
+        if len(coarse) == 1:
+            share = np.ones(lams.shape)
+        if not share.any():
+            continue
+        R, T = stack_spectra(stack, n0, below[node:node + 1], cos0, (u * lam)[None, :], coarse[node:node + 1], draw)
+        matrix = _reading(i, w, share[:, None] * weights, len(u))  # (U, M * 3)
+        for o, x in zip(out, (R, T)):
+            o += np.einsum("cu,uk->ck", x[..., 0], matrix).reshape(o.shape)  # no BLAS threads beside the pool's
+    return out[0], out[1]
+
+
+def _along_u(stack: FilmStack, lower, cosines: int, scale, lams, draw):
+    """The values of ``u = s / lambda`` and the wavelengths :func:`grid_colour` computes the stack at, or None where
+    computing every pair costs less."""
     factors = np.ones(stack.count) if draw is None else np.asarray(draw)
     index = {f: film_index(f, lams) for f in stack.films}
     optical = sum(f.thickness_nm * x * float(np.max(np.abs(index[f]))) for f, x in zip(stack.layers, factors))
@@ -224,22 +255,21 @@ def grid_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, d
     count = max(math.ceil((hi - lo) * 2.0 * optical * SCALE_FREE_SAMPLES) + 2, 2)
     nodes = 1 if moved == 0.0 and _spread(lower) == 0.0 else \
         max(math.ceil(2.0 * hi * moved * SCALE_FREE_SAMPLES) + 1, LEAST_WAVELENGTH_NODES)
-    if 2 * count * nodes >= scale.size * lams.size:  # half the pairs at most (each wavelength a call of its own)
-        return stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
-    u = np.linspace(lo, hi, count)
-    coarse = np.linspace(lams.min(), lams.max(), nodes) if nodes > 1 else lams[:1]
-    below = np.interp(coarse, lams, np.real(lower)) + 1j * np.interp(coarse, lams, np.imag(lower))
-    computed = [stack_spectra(stack, n0, below[k:k + 1], cos0, (u * lam)[None, :], coarse[k:k + 1], draw)
-                for k, lam in enumerate(coarse)]  # each (C, U, 1)
-    R, T = (np.concatenate([c[j] for c in computed * (2 if nodes == 1 else 1)], axis=-1) for j in (0, 1))
-    at = (scale[0][:, None] / lams[None, :] - lo) / (u[1] - u[0])  # (M, L): where each pair's s / lambda lies
-    i = np.clip(at.astype(int), 0, count - 2)
-    w = np.clip(at - i, 0.0, 1.0)
-    along = np.zeros(lams.shape) if nodes == 1 else (lams - coarse[0]) / (coarse[1] - coarse[0])
-    k = np.clip(along.astype(int), 0, R.shape[-1] - 2)[None, :]
-    v = np.clip(along[None, :] - k, 0.0, 1.0)
-    return tuple((x[:, i, k] * (1.0 - w) + x[:, i + 1, k] * w) * (1.0 - v) +
-                 (x[:, i, k + 1] * (1.0 - w) + x[:, i + 1, k + 1] * w) * v for x in (R, T))
+    if 2 * nodes * (cosines * count + CALL_POINTS) >= cosines * scale.size * lams.size:  # half the cost, at most
+        return None
+    return np.linspace(lo, hi, count), (np.linspace(lams.min(), lams.max(), nodes) if nodes > 1 else lams[:1])
+
+
+def _reading(i, w, weights, count: int) -> np.ndarray:
+    """The (U, M * 3) matrix that takes a spectrum along ``u`` to each scale's channels: pair ``(m, l)`` reads
+    ``u`` values ``i`` and ``i + 1`` (weights ``1 - w`` and ``w``), wavelength ``l`` weighs ``weights[l]``."""
+    rows = i.shape[0]
+    matrix = np.zeros((count * rows, 3))
+    for at, part in ((i, 1.0 - w), (i + 1, w)):
+        where = (at * rows + np.arange(rows)[:, None]).ravel()  # (u, m) flattened
+        for c in range(3):
+            matrix[:, c] += np.bincount(where, (part * weights[None, :, c]).ravel(), minlength=count * rows)
+    return matrix.reshape(count, rows * 3)
 
 
 def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, accuracy: str = "analytic",
@@ -265,8 +295,8 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
     for k, draw in enumerate(draws):
         shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
         lams, weights = channel_weights(accuracy, step, shift)
-        r, t = grid_spectra(stack, n0, lower_index(*lower_rgb, lams, lower_medium), cos0, scale, lams, draw)
-        R, T = R + r @ weights, T + t @ weights
+        r, t = grid_colour(stack, n0, lower_index(*lower_rgb, lams, lower_medium), cos0, scale, lams, weights, draw)
+        R, T = R + r, T + t
     R, T = R / len(draws), T / len(draws)
     # A saturated stack's colour can lie outside Rec.709 (a negative channel), which a closure's weight
     # cannot hold: each channel within [0, 1] (within_gamut), what the films absorb kept, and what passes
