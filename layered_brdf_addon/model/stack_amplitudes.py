@@ -22,6 +22,8 @@ import math
 
 import numpy as np
 
+from .incoherent import repeated
+
 MIN_COS = 1.0e-6  # the most grazing outside cosine the optics take
 
 
@@ -44,14 +46,7 @@ def _star(a, b):
 
 def _power(cell, count: int):
     """``cell`` star ``cell`` ... ``count`` times, by squaring (``log2 count`` products)."""
-    out = None
-    while count:
-        if count & 1:
-            out = cell if out is None else _star(out, cell)
-        count >>= 1
-        if count:
-            cell = _star(cell, cell)
-    return out
+    return repeated(cell, count, _star)
 
 
 def _interface(na, qa, nb, qb):
