@@ -257,6 +257,8 @@ def _along_u(stack: FilmStack, lower, cosines: int, scale, lams, draw):
         max(math.ceil(2.0 * hi * moved * SCALE_FREE_SAMPLES) + 1, LEAST_WAVELENGTH_NODES)
     if 2 * nodes * (cosines * count + CALL_POINTS) >= cosines * scale.size * lams.size:  # half the cost, at most
         return None
+    if nodes > 1 and np.any(np.diff(lams) <= 0.0):  # read between wavelengths in order only (not 'rgb''s three)
+        return None
     return np.linspace(lo, hi, count), (np.linspace(lams.min(), lams.max(), nodes) if nodes > 1 else lams[:1])
 
 
