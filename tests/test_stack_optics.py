@@ -153,3 +153,15 @@ def test_a_grid_is_read_along_thickness_over_wavelength_as_every_pair_computes_i
     pairs = stack_colour(stack, 1.0, lower, C.ravel(), S.ravel(), lower_medium=medium, step_nm=step)
     for g, p in zip(grid, pairs):
         assert np.abs(g.reshape(-1, 3) - p).max() < 2e-3
+
+
+@pytest.mark.parametrize("scale", [0.0, 1.0])
+def test_a_grid_of_one_thickness_reads_as_its_pairs(scale):
+    """A constant thickness (one row), none included: the grid's colour is every pair's, finite."""
+    stack = FilmStack.from_dict(SCALE_FREE["labradorite's lamellae"][0])
+    lower = ((1.5,) * 3, (0.0,) * 3)
+    cos = np.linspace(0.0, 1.0, 128)
+    grid = stack_colour(stack, 1.0, lower, cos[:, None], np.array([[scale]]))
+    pairs = stack_colour(stack, 1.0, lower, cos, np.full(cos.shape, scale))
+    for g, p in zip(grid, pairs):
+        assert np.isfinite(g).all() and np.abs(g[:, 0] - p).max() < 2e-3

@@ -259,6 +259,8 @@ def _along_u(stack: FilmStack, lower, cosines: int, scale, lams, draw):
         return None
     if nodes > 1 and np.any(np.diff(lams) <= 0.0):  # read between wavelengths in order only (not 'rgb''s three)
         return None
+    if not hi > lo:  # every scale 0 (no films' thickness): nothing to read along
+        return None
     return np.linspace(lo, hi, count), (np.linspace(lams.min(), lams.max(), nodes) if nodes > 1 else lams[:1])
 
 
