@@ -227,14 +227,9 @@ def grid_colour(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, we
     at = (scale[0][:, None] / lams[None, :] - u[0]) / (u[1] - u[0])  # (M, L): where each pair's s / lambda lies
     i = np.clip(at.astype(int), 0, len(u) - 2)
     w = np.clip(at - i, 0.0, 1.0)
-    along = np.zeros(lams.shape) if len(coarse) == 1 else (lams - coarse[0]) / (coarse[1] - coarse[0])
-    k = np.clip(along.astype(int), 0, max(len(coarse) - 2, 0))
-    v = np.clip(along - k, 0.0, 1.0)
     out = [np.zeros(cos0.shape[:1] + (rows, 3)), np.zeros(cos0.shape[:1] + (rows, 3))]
     for node, lam in enumerate(coarse):
-        share = np.where(k == node, 1.0 - v, 0.0) + np.where(k + 1 == node, v, 0.0)  # (L,): this wavelength's part
-        if len(coarse) == 1:
-            share = np.ones(lams.shape)
+        share = np.interp(lams, coarse, np.eye(len(coarse))[node])  # (L,): this wavelength's part (1 for one)
         if not share.any():
             continue
         R, T = stack_spectra(stack, n0, below[node:node + 1], cos0, (u * lam)[None, :], coarse[node:node + 1], draw)
