@@ -202,27 +202,32 @@ def _spread(index) -> float:
     return float(np.ptp(np.real(index)) + np.ptp(np.imag(index)))
 
 
-def grid_colour(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, weights, draw=None):
-    """``(R, T)`` per channel, ``spectrum @ weights`` (``weights``: (L, 3)), of :func:`stack_spectra` on a grid of
-    cosines ``(C, 1)`` and scales ``(1, M)``, from the stack computed along ``u = s / lambda``.  A film's phase is
-    ``2 pi u`` times its ``n d cos``, and every boundary's amplitudes depend on the media's indices only: where
-    neither a film nor the lower medium disperses, the stack at one wavelength along :data:`SCALE_FREE_SAMPLES`
-    values of ``u`` a fringe of the whole stack holds every scale and wavelength, read linearly between them
-    (labradorite's tables: 881 values of ``u`` where its 102 rows and 400 wavelengths make 40,800 pairs).  Where
-    they disperse, the stack is computed so at a few wavelengths (:data:`LEAST_WAVELENGTH_NODES`, more where the
-    films' indices move their phase by more than a :data:`SCALE_FREE_SAMPLES`-th of a fringe between two) and
-    read linearly between those too.  The readings and the band's weights are one matrix per wavelength computed
-    (``u`` to each scale's channels).  Every pair on its own where that would cost more (a few scales, or films
-    that disperse strongly)."""
-    lams = np.asarray(wavelengths, dtype=float)
+def grid_colour(stack: FilmStack, n0: float, lower_at, cos0, scale, accuracy: str, step: float, draws):
+    """``(R, T)`` per channel of :func:`stack_colour` on a grid of cosines ``(C, 1)`` and scales ``(1, M)``, averaged
+    over ``draws`` (:func:`disorder_draws`, or ``[None]``), from the stack computed along ``u = s / lambda``; None
+    where computing every pair costs less (a few scales, films that disperse strongly) or the grid is not one.
+
+    A film's phase is ``2 pi u`` times its ``n d cos``, and every boundary's amplitudes depend on the media's indices
+    only: where neither a film nor the lower medium disperses, the stack at one wavelength along
+    :data:`SCALE_FREE_SAMPLES` values of ``u`` a fringe of the whole stack holds every scale and wavelength, read
+    linearly between them (labradorite's tables: 881 values of ``u`` where its 102 rows and 400 wavelengths make
+    40,800 pairs).  Where they disperse, the stack is computed so at a few wavelengths
+    (:data:`LEAST_WAVELENGTH_NODES`, more where the films' indices move their phase by more than a
+    :data:`SCALE_FREE_SAMPLES`-th of a fringe between two) and read linearly between those too.  The draws share
+    the values of ``u``: their mean is read once, at every draw's wavelengths (each draw's moved by its share of a
+    step, :func:`stack_colour`: together a step ``len(draws)`` times finer).  The readings and the band's weights
+    are one matrix per wavelength computed (``u`` to each scale's channels).  ``lower_at``: the lower medium's index
+    at given wavelengths."""
     cos0, scale = np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float)
-    grid = cos0.ndim == 2 and scale.ndim == 2 and cos0.shape[1] == 1 and scale.shape[0] == 1 and lams.size > 1
-    plan = _along_u(stack, lower, cos0.shape[0], scale, lams, draw) if grid else None
+    if not (cos0.ndim == 2 and scale.ndim == 2 and cos0.shape[1] == 1 and scale.shape[0] == 1):
+        return None
+    lams, weights = channel_weights(accuracy, step / len(draws) if accuracy == "analytic" else step)
+    pairs = cos0.shape[0] * scale.size * lams.size  # every draw's pairs (its wavelengths a share of these)
+    plan = _along_u(stack, lower_at(lams), cos0.shape[0], scale, lams, draws, pairs) if lams.size > 1 else None
     if plan is None:
-        r, t = stack_spectra(stack, n0, lower, cos0, scale, lams, draw)
-        return r @ weights, t @ weights
+        return None
     u, coarse = plan
-    below = np.interp(coarse, lams, np.real(lower)) + 1j * np.interp(coarse, lams, np.imag(lower))
+    below = lower_at(coarse)
     rows = scale.shape[1]
     at = (scale[0][:, None] / lams[None, :] - u[0]) / (u[1] - u[0])  # (M, L): where each pair's s / lambda lies
     i = np.clip(at.astype(int), 0, len(u) - 2)
@@ -232,25 +237,31 @@ def grid_colour(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, we
         share = np.interp(lams, coarse, np.eye(len(coarse))[node])  # (L,): this wavelength's part (1 for one)
         if not share.any():
             continue
-        R, T = stack_spectra(stack, n0, below[node:node + 1], cos0, (u * lam)[None, :], coarse[node:node + 1], draw)
-        matrix = _reading(i, w, share[:, None] * weights, len(u))  # (U, M * 3)
+        R = T = 0.0
+        for draw in draws:
+            r, t = stack_spectra(stack, n0, below[node:node + 1], cos0, (u * lam)[None, :], coarse[node:node + 1],
+                                 draw)
+            R, T = R + r[..., 0], T + t[..., 0]
+        matrix = _reading(i, w, share[:, None] * weights, len(u)) / len(draws)  # (U, M * 3), the draws' mean
         for o, x in zip(out, (R, T)):
-            o += np.einsum("cu,uk->ck", x[..., 0], matrix).reshape(o.shape)  # no BLAS threads beside the pool's
+            o += np.einsum("cu,uk->ck", x, matrix).reshape(o.shape)  # no BLAS threads beside the pool's
     return out[0], out[1]
 
 
-def _along_u(stack: FilmStack, lower, cosines: int, scale, lams, draw):
-    """The values of ``u = s / lambda`` and the wavelengths :func:`grid_colour` computes the stack at, or None where
-    computing every pair costs less."""
-    factors = np.ones(stack.count) if draw is None else np.asarray(draw)
+def _along_u(stack: FilmStack, lower, cosines: int, scale, lams, draws, pairs: int):
+    """The values of ``u = s / lambda`` and the wavelengths :func:`grid_colour` computes the stack at (every draw's
+    fringes sampled), or None where computing the ``pairs`` costs less."""
     index = {f: film_index(f, lams) for f in stack.films}
-    optical = sum(f.thickness_nm * x * float(np.max(np.abs(index[f]))) for f, x in zip(stack.layers, factors))
-    moved = sum(f.thickness_nm * x * _spread(index[f]) for f, x in zip(stack.layers, factors))  # nm of n d
+    factors = [np.ones(stack.count) if draw is None else np.asarray(draw) for draw in draws]
+    optical = max(sum(f.thickness_nm * x * float(np.max(np.abs(index[f]))) for f, x in zip(stack.layers, factor))
+                  for factor in factors)
+    moved = max(sum(f.thickness_nm * x * _spread(index[f]) for f, x in zip(stack.layers, factor))  # nm of n d
+                for factor in factors)
     lo, hi = float(np.min(scale)) / lams.max(), float(np.max(scale)) / lams.min()
     count = max(math.ceil((hi - lo) * 2.0 * optical * SCALE_FREE_SAMPLES) + 2, 2)
     nodes = 1 if moved == 0.0 and _spread(lower) == 0.0 else \
         max(math.ceil(2.0 * hi * moved * SCALE_FREE_SAMPLES) + 1, LEAST_WAVELENGTH_NODES)
-    if 2 * nodes * (cosines * count + CALL_POINTS) >= cosines * scale.size * lams.size:  # half the cost, at most
+    if 2 * len(draws) * nodes * (cosines * count + CALL_POINTS) >= pairs:  # half the cost, at most
         return None
     if nodes > 1 and np.any(np.diff(lams) <= 0.0):  # read between wavelengths in order only (not 'rgb''s three)
         return None
@@ -290,13 +301,22 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
     # sums the whole band finely; 'rgb' keeps the paper's three wavelengths.
     accuracy = "rgb" if accuracy == "rgb" else "analytic"
     step = colour_step(stack, float(np.max(scale))) if step_nm is None else step_nm
-    draws, R, T = [None] if not stack.disorder else list(disorder_draws(stack)), 0.0, 0.0
-    for k, draw in enumerate(draws):
-        shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
-        lams, weights = channel_weights(accuracy, step, shift)
-        r, t = grid_colour(stack, n0, lower_index(*lower_rgb, lams, lower_medium), cos0, scale, lams, weights, draw)
-        R, T = R + r, T + t
-    R, T = R / len(draws), T / len(draws)
+    draws = [None] if not stack.disorder else list(disorder_draws(stack))
+
+    def lower_at(lams):
+        return lower_index(*lower_rgb, lams, lower_medium)
+
+    read = grid_colour(stack, n0, lower_at, cos0, scale, accuracy, step, draws)
+    if read is not None:
+        R, T = read
+    else:
+        R = T = 0.0
+        for k, draw in enumerate(draws):
+            shift = (k + 0.5) / len(draws) - 0.5 if accuracy == "analytic" and len(draws) > 1 else 0.0
+            lams, weights = channel_weights(accuracy, step, shift)
+            r, t = stack_spectra(stack, n0, lower_at(lams), cos0, scale, lams, draw)
+            R, T = R + r @ weights, T + t @ weights
+        R, T = R / len(draws), T / len(draws)
     # A saturated stack's colour can lie outside Rec.709 (a negative channel), which a closure's weight
     # cannot hold: each channel within [0, 1] (within_gamut), what the films absorb kept, and what passes
     # within what is not reflected.
