@@ -9,7 +9,7 @@ import pytest
 from layered_brdf_addon.model.presets import STACK_PRESETS, preset
 from layered_brdf_addon.model.stack import FilmStack
 from layered_brdf_addon.model.stack_amplitudes import periodic_reflect_transmit, reflect_transmit
-from layered_brdf_addon.model.stack_optics import SPECTRUM_NM, StackResponse, stack_colour
+from layered_brdf_addon.model.stack_optics import LEAST_WAVELENGTH_NODES, SPECTRUM_NM, StackResponse, stack_colour
 from layered_brdf_reference.stack_colours import stack_error
 from layered_brdf_reference.thin_film import stack_reflectance_transmittance
 
@@ -43,6 +43,23 @@ def test_random_stacks_reflect_and_pass_what_tmm_says(seed, absorbing):
         R_ref, T_ref = _tmm(indices, thicknesses, lower, theta)
         assert np.abs(R - R_ref).max() <= OPTICS_TOL, f"{len(indices)} films at {theta:g} deg: R"
         assert np.abs(T - T_ref).max() <= OPTICS_TOL, f"{len(indices)} films at {theta:g} deg: T"
+
+
+@pytest.mark.parametrize("absorbing", [False, True], ids=["dielectric", "absorbing"])
+def test_films_summed_once_over_many_lower_indices_reflect_and_pass_what_tmm_says(absorbing):
+    """The films at one wavelength, summed once as the map of the lowest boundary's amplitude, over a lower medium
+    given at several indices (a metal's, over the band): each index's R and T, as tmm gives them."""
+    rng = np.random.default_rng(11 + absorbing)
+    indices, thicknesses, _ = _random_stack(rng, absorbing)
+    lowers = np.array([0.2 + 3.4j, 0.5 + 2.4j, 1.2 + 1.8j, 1.5 + 0.0j, 2.9 + 0.3j])
+    lam = np.array([550.0])
+    for theta in ANGLES:
+        cos0 = np.cos(np.radians(theta))
+        R, T = reflect_transmit(1.0, [np.full(1, n) for n in indices], thicknesses, lowers, cos0, lam)
+        assert R.shape == T.shape == lowers.shape
+        for j, lower in enumerate(lowers):
+            R_ref, T_ref = stack_reflectance_transmittance(1.0, indices, thicknesses, lower, theta, lam)
+            assert abs(R[j] - R_ref[0]) <= OPTICS_TOL and abs(T[j] - T_ref[0]) <= OPTICS_TOL, f"{lower} at {theta:g}"
 
 
 def test_a_period_raised_to_its_power_is_the_films_one_by_one():
@@ -153,6 +170,32 @@ def test_a_grid_is_read_along_thickness_over_wavelength_as_every_pair_computes_i
     pairs = stack_colour(stack, 1.0, lower, C.ravel(), S.ravel(), lower_medium=medium, step_nm=step)
     for g, p in zip(grid, pairs):
         assert np.abs(g.reshape(-1, 3) - p).max() < 2e-3
+
+
+@pytest.mark.parametrize("medium,disorder", [("gold", 0.0), ("copper", 0.05), ("silver", 0.0), ("aluminium", 0.05)])
+def test_a_grid_over_a_metal_holds_its_steep_spectrum(medium, disorder, monkeypatch):
+    """Over a metal (n and k moving by several units over the band), a grid's films are summed once, at one
+    wavelength, as a map of the metal's boundary, applied at wavelengths as close as its index calls for: as close
+    to the band summed four times more finely as every pair at the colour's own step is (measured: 0.002-0.007 off
+    it at 87 degrees, where the mirror's resonances are sharpest; 5 wavelengths read between were 0.04-0.11 off)."""
+    from layered_brdf_addon.model import stack_optics
+    stack = FilmStack.from_dict({"films": [{"ior": 1.56, "thickness_nm": 90.0}, {"medium": "air", "thickness_nm": 97.5}],
+                                 "periods": 8, "disorder": disorder})
+    lower = ((1.5,) * 3, (0.0,) * 3)
+    cos, scale = np.linspace(0.05, 1.0, 9), np.linspace(0.8, 1.2, 64)
+    step = stack_optics.colour_step(stack, 1.2)
+    seen = []
+    inner = stack_optics.stack_spectra
+    monkeypatch.setattr(stack_optics, "stack_spectra",
+                        lambda *a, **k: seen.append((len(a[5]), np.size(a[2]))) or inner(*a, **k))
+    grid = stack_colour(stack, 1.0, lower, cos[:, None], scale[None, :], lower_medium=medium, step_nm=step)[0]
+    assert seen and all(lams == 1 and lowers > LEAST_WAVELENGTH_NODES for lams, lowers in seen)  # summed once, mapped
+    monkeypatch.setattr(stack_optics, "stack_spectra", inner)
+    C, S = np.meshgrid(cos, scale, indexing="ij")
+    pairs = stack_colour(stack, 1.0, lower, C.ravel(), S.ravel(), lower_medium=medium, step_nm=step)[0]
+    fine = stack_colour(stack, 1.0, lower, C.ravel(), S.ravel(), lower_medium=medium, step_nm=step / 4)[0]
+    grid = grid.reshape(-1, 3)
+    assert np.abs(grid - fine).max() <= np.abs(pairs - fine).max() + 1e-3
 
 
 @pytest.mark.parametrize("scale", [0.0, 1.0])

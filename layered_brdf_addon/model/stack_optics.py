@@ -195,6 +195,7 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
 SCALE_FREE_SAMPLES = 32  # values of s / lambda a fringe (linear between them: 0.5% of a fringe), and wavelengths
 # as finely in the phase the media's dispersion moves
 LEAST_WAVELENGTH_NODES = 5  # wavelengths a stack whose media disperse is computed at, at least (every 100 nm)
+LOWER_SPREAD_A_NODE = 0.05  # how far the lower medium's n + k moves between two wavelengths computed, at most
 CALL_POINTS = 4096  # points whose sums cost what a sum's numpy calls cost (each wavelength computed is a sum)
 
 
@@ -208,16 +209,19 @@ def grid_colour(stack: FilmStack, n0: float, lower_at, cos0, scale, accuracy: st
     where computing every pair costs less (a few scales, films that disperse strongly) or the grid is not one.
 
     A film's phase is ``2 pi u`` times its ``n d cos``, and every boundary's amplitudes depend on the media's indices
-    only: where neither a film nor the lower medium disperses, the stack at one wavelength along
-    :data:`SCALE_FREE_SAMPLES` values of ``u`` a fringe of the whole stack holds every scale and wavelength, read
-    linearly between them (labradorite's tables: 881 values of ``u`` where its 102 rows and 400 wavelengths make
-    40,800 pairs).  Where they disperse, the stack is computed so at a few wavelengths
-    (:data:`LEAST_WAVELENGTH_NODES`, more where the films' indices move their phase by more than a
-    :data:`SCALE_FREE_SAMPLES`-th of a fringe between two) and read linearly between those too.  The draws share
-    the values of ``u``: their mean is read once, at every draw's wavelengths (each draw's moved by its share of a
-    step, :func:`stack_colour`: together a step ``len(draws)`` times finer).  The readings and the band's weights
-    are one matrix per wavelength computed (``u`` to each scale's channels).  ``lower_at``: the lower medium's index
-    at given wavelengths."""
+    only: where no film disperses, the films summed at one wavelength along :data:`SCALE_FREE_SAMPLES` values of
+    ``u`` a fringe of the whole stack hold every scale and wavelength, read linearly between them (labradorite's
+    tables: 881 values of ``u`` where its 102 rows and 400 wavelengths make 40,800 pairs); a lower medium that
+    disperses takes that sum as a map of its boundary's amplitude (:func:`.stack_amplitudes.reflect_transmit`),
+    applied at wavelengths where its index moves by :data:`LOWER_SPREAD_A_NODE` at most between two (a metal's
+    steep spectrum).  Where films disperse, the stack is computed so at a few wavelengths
+    (:data:`LEAST_WAVELENGTH_NODES`, more where their indices move their phase by more than a
+    :data:`SCALE_FREE_SAMPLES`-th of a fringe between two).  Between the wavelengths computed, linearly too: each
+    computed for the values of ``u`` its neighbours' band reads only.  The draws share the values of ``u``: their
+    mean is read once, at every draw's wavelengths (each draw's moved by its share of a step, :func:`stack_colour`:
+    together a step ``len(draws)`` times finer).  The readings and the band's weights are one matrix per
+    wavelength computed (``u`` to each scale's channels).  ``lower_at``: the lower medium's index at given
+    wavelengths."""
     cos0, scale = np.asarray(cos0, dtype=float), np.asarray(scale, dtype=float)
     if not (cos0.ndim == 2 and scale.ndim == 2 and cos0.shape[1] == 1 and scale.shape[0] == 1):
         return None
@@ -226,31 +230,41 @@ def grid_colour(stack: FilmStack, n0: float, lower_at, cos0, scale, accuracy: st
     plan = _along_u(stack, lower_at(lams), cos0.shape[0], scale, lams, draws, pairs) if lams.size > 1 else None
     if plan is None:
         return None
-    u, coarse = plan
+    u, coarse, mapped = plan
     below = lower_at(coarse)
     rows = scale.shape[1]
     at = (scale[0][:, None] / lams[None, :] - u[0]) / (u[1] - u[0])  # (M, L): where each pair's s / lambda lies
     i = np.clip(at.astype(int), 0, len(u) - 2)
     w = np.clip(at - i, 0.0, 1.0)
+
+    def summed(lam, lower, band):  # the draws' mean along u[band], at ``lam`` over ``lower``
+        R = T = 0.0
+        for draw in draws:
+            r, t = stack_spectra(stack, n0, lower, cos0, (u[band] * lam)[None, :], np.array([lam]), draw)
+            R, T = R + r, T + t
+        return R / len(draws), T / len(draws)
+
+    whole = summed(coarse[0], below, slice(None)) if mapped else None  # (C, U, nodes)
     out = [np.zeros(cos0.shape[:1] + (rows, 3)), np.zeros(cos0.shape[:1] + (rows, 3))]
     for node, lam in enumerate(coarse):
         share = np.interp(lams, coarse, np.eye(len(coarse))[node])  # (L,): this wavelength's part (1 for one)
-        if not share.any():
+        ls = np.flatnonzero(share)
+        if not ls.size:
             continue
-        R = T = 0.0
-        for draw in draws:
-            r, t = stack_spectra(stack, n0, below[node:node + 1], cos0, (u * lam)[None, :], coarse[node:node + 1],
-                                 draw)
-            R, T = R + r[..., 0], T + t[..., 0]
-        matrix = _reading(i, w, share[:, None] * weights, len(u)) / len(draws)  # (U, M * 3), the draws' mean
+        first, last = int(i[:, ls].min()), int(i[:, ls].max()) + 2  # the values of u this band reads
+        band = slice(first, last)
+        R, T = ([x[..., band, node] for x in whole] if mapped else
+                [x[..., 0] for x in summed(lam, below[node:node + 1], band)])
+        matrix = _reading(i[:, ls] - first, w[:, ls], share[ls, None] * weights[ls], last - first)  # (U, M * 3)
         for o, x in zip(out, (R, T)):
             o += np.einsum("cu,uk->ck", x, matrix).reshape(o.shape)  # no BLAS threads beside the pool's
     return out[0], out[1]
 
 
 def _along_u(stack: FilmStack, lower, cosines: int, scale, lams, draws, pairs: int):
-    """The values of ``u = s / lambda`` and the wavelengths :func:`grid_colour` computes the stack at (every draw's
-    fringes sampled), or None where computing the ``pairs`` costs less."""
+    """``(u, wavelengths, mapped)``: the values of ``u = s / lambda`` (every draw's fringes sampled) and the
+    wavelengths :func:`grid_colour` computes the stack at, and whether the films are summed once for all of them (no
+    film disperses); or None where computing the ``pairs`` costs less."""
     index = {f: film_index(f, lams) for f in stack.films}
     factors = [np.ones(stack.count) if draw is None else np.asarray(draw) for draw in draws]
     optical = max(sum(f.thickness_nm * x * float(np.max(np.abs(index[f]))) for f, x in zip(stack.layers, factor))
@@ -259,20 +273,28 @@ def _along_u(stack: FilmStack, lower, cosines: int, scale, lams, draws, pairs: i
                 for factor in factors)
     lo, hi = float(np.min(scale)) / lams.max(), float(np.max(scale)) / lams.min()
     count = max(math.ceil((hi - lo) * 2.0 * optical * SCALE_FREE_SAMPLES) + 2, 2)
-    nodes = 1 if moved == 0.0 and _spread(lower) == 0.0 else \
-        max(math.ceil(2.0 * hi * moved * SCALE_FREE_SAMPLES) + 1, LEAST_WAVELENGTH_NODES)
-    if 2 * len(draws) * nodes * (cosines * count + CALL_POINTS) >= pairs:  # half the cost, at most
+    mapped = moved == 0.0 and _spread(lower) > 0.0
+    if mapped:
+        nodes = max(math.ceil(_spread(lower) / LOWER_SPREAD_A_NODE) + 1, LEAST_WAVELENGTH_NODES)
+        sums = 2 * len(draws)  # a map's sum costs two
+    else:
+        nodes = 1 if moved == 0.0 else max(math.ceil(2.0 * hi * moved * SCALE_FREE_SAMPLES) + 1,
+                                           LEAST_WAVELENGTH_NODES)
+        sums = len(draws) * nodes
+    if 2 * sums * (cosines * count + CALL_POINTS) >= pairs:  # half the cost, at most
         return None
     if nodes > 1 and np.any(np.diff(lams) <= 0.0):  # read between wavelengths in order only (not 'rgb''s three)
         return None
     if not hi > lo:  # every scale 0 (no films' thickness): nothing to read along
         return None
-    return np.linspace(lo, hi, count), (np.linspace(lams.min(), lams.max(), nodes) if nodes > 1 else lams[:1])
+    return (np.linspace(lo, hi, count), (np.linspace(lams.min(), lams.max(), nodes) if nodes > 1 else lams[:1]),
+            mapped)
 
 
 def _reading(i, w, weights, count: int) -> np.ndarray:
-    """The (U, M * 3) matrix that takes a spectrum along ``u`` to each scale's channels: pair ``(m, l)`` reads
-    ``u`` values ``i`` and ``i + 1`` (weights ``1 - w`` and ``w``), wavelength ``l`` weighs ``weights[l]``."""
+    """The (U, M * 3) matrix that takes a spectrum along ``count`` values of ``u`` to each scale's channels: pair
+    ``(m, l)`` reads ``u`` values ``i`` and ``i + 1`` (weights ``1 - w`` and ``w``), wavelength ``l`` weighs
+    ``weights[l]``."""
     rows = i.shape[0]
     matrix = np.zeros((count * rows, 3))
     for at, part in ((i, 1.0 - w), (i + 1, w)):
