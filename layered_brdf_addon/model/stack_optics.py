@@ -27,7 +27,7 @@ import numpy as np
 from .dispersion import abbe_index
 from .colour_gamut import within_gamut
 from .incoherent import pile
-from .media import spectrum
+from .media import medium as named_medium, spectrum
 from .spectral_tables import observer, tables
 from .stack_amplitudes import _mean, periodic_reflect_transmit, reflect_transmit
 from .stack import FilmStack
@@ -101,11 +101,19 @@ def _cauchy(values_rgb, wavelengths) -> np.ndarray:
     return coefficients[0] + coefficients[1] * w + coefficients[2] * w * w
 
 
+def _measured(name: str, wavelengths) -> np.ndarray:
+    """A named medium's ``n + i k`` at ``wavelengths``: :func:`.media.spectrum`'s linear reading of its samples
+    (and its error outside them), numpy's for the thousands of wavelengths a band summed finely takes."""
+    lams = np.asarray(wavelengths, dtype=float)
+    spectrum(name, [float(lams.min()), float(lams.max())] if lams.size else [])
+    m = named_medium(name)
+    return np.interp(lams, m.wavelengths, m.n_spectrum) + 1j * np.interp(lams, m.wavelengths, m.k_spectrum)
+
+
 def film_index(film, wavelengths) -> np.ndarray:
     """A film's complex index ``n + i k`` at ``wavelengths`` (nm)."""
     if film.medium:
-        n, k = spectrum(film.medium, wavelengths)
-        return np.asarray(n) + 1j * np.asarray(k)
+        return _measured(film.medium, wavelengths)
     lams = np.asarray(wavelengths, dtype=float)
     return abbe_index(film.ior, film.dispersion, lams) + 1j * film.k
 
@@ -114,8 +122,7 @@ def lower_index(r2, k2, wavelengths, medium: str = "custom") -> np.ndarray:
     """The lower medium's complex index at ``wavelengths``: a named medium's measured spectrum, or the
     three per-channel values ``r2``, ``k2`` joined by a Cauchy law (n at least 0.01, k at least 0)."""
     if medium and medium != "custom":
-        n, k = spectrum(medium, wavelengths)
-        return np.asarray(n) + 1j * np.asarray(k)
+        return _measured(medium, wavelengths)
     n = np.maximum(_cauchy(r2, wavelengths), 0.01)
     k = np.maximum(_cauchy(k2, wavelengths), 0.0)
     return n + 1j * k
@@ -139,6 +146,7 @@ COHERENCE_SPREAD_NM = 95.0  # optical thickness spread past which a disordered s
 # (a spread of ``n d`` of 95 nm spreads the round trip's phase by pi at 380 nm)
 
 
+@functools.lru_cache(maxsize=1024)
 def film_optical(film) -> float:
     """A film's optical thickness (nm, ``n d`` at its highest index over the band)."""
     return film.thickness_nm * float(np.max(film_index(film, SPECTRUM_NM).real))
