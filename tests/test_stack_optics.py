@@ -179,8 +179,8 @@ def test_a_grid_over_a_metal_holds_its_steep_spectrum(medium, disorder, monkeypa
     to the band summed four times more finely as every pair at the colour's own step is (measured: 0.002-0.007 off
     it at 87 degrees, where the mirror's resonances are sharpest; 5 wavelengths read between were 0.04-0.11 off)."""
     from layered_brdf_addon.model import stack_optics
-    stack = FilmStack.from_dict({"films": [{"ior": 1.56, "thickness_nm": 90.0}, {"medium": "air", "thickness_nm": 97.5}],
-                                 "periods": 8, "disorder": disorder})
+    films = [{"ior": 1.56, "thickness_nm": 90.0}, {"medium": "air", "thickness_nm": 97.5}]
+    stack = FilmStack.from_dict({"films": films, "periods": 8, "disorder": disorder})
     lower = ((1.5,) * 3, (0.0,) * 3)
     cos, scale = np.linspace(0.05, 1.0, 9), np.linspace(0.8, 1.2, 64)
     step = stack_optics.colour_step(stack, 1.2)

@@ -321,7 +321,8 @@ def stack_colour(stack: FilmStack, n0: float, lower_rgb: tuple, cos0, scale, acc
 
     A disordered stack is averaged over its draws (:func:`disorder_draws`), each summed on wavelengths
     moved by its share of a step: what a draw's fine fringes alias to, the draws average out (the analytic
-    mode's step follows the fringes of the films that interfere, :func:`coherent_optical`).  A colour outside
+    mode's step follows the fringes of the films that interfere, :func:`coherent_optical`); on a grid read
+    along ``s / lambda`` (:func:`grid_colour`) every draw is read at all the draws' wavelengths.  A colour outside
     Rec.709's gamut (a saturated Bragg peak) is held within it channel by channel, ``R`` in [0, 1] and ``T``
     in [0, 1 - R] (``gamut=False``: as the optics give it).  ``step_nm``: the wavelength step, where the caller
     chose it for more points than these (:func:`spectral_step` of the largest scale otherwise).  Every film is
