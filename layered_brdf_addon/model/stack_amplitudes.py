@@ -173,9 +173,12 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths, 
 
     ``lower`` may instead hold N indices where ``wavelengths`` holds one (the films' indices and phases those
     at that wavelength: a stack computed along ``s / lambda``, over a lower medium that disperses): the films
-    are summed once, as the map of the lowest boundary's amplitude ``r_b`` to the stack's, ``(A r_b + B) /
-    (C r_b + D)`` (each film's step is linear in the sum's numerator and denominator), and the arrays are of
-    shape ``S + (N,)``, one per lower index."""
+    are summed once, as the map of the lowest boundary's amplitude ``r_b`` to the stack's (each film's step is
+    linear in the sum's numerator and denominator), and the arrays are of shape ``S + (N,)``, one per lower
+    index.  The map is carried as two sums: from the middle index's amplitude ``r_m`` (a stack's own sum) and
+    from a unit step of it, ``((r_b - r_m) A + B) / ((r_b - r_m) C + D)``: where the index moves little, a small
+    correction to one sum, as precise as it near grazing (from ``r_b = 1`` and ``0``, in single precision, the
+    two nearly cancelled: R up to 0.15 off a chitin-air mirror's at 89.9 degrees)."""
     lams = np.asarray(wavelengths, dtype=float)
     media, qs = _media(n0, indices, lower, cos0, lams)
     # The sum runs in single precision (the films' many steps at half the cost; R within 1e-4 of double), both
@@ -197,8 +200,9 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths, 
     shape = (2,) + np.broadcast_shapes(*ends, *(q.shape for q in qs[1:len(qs) - 1 if mapped else 2]),
                                        *(x.shape for x in thick))
     # r = num / den (and t = tn / den): each film's step is products and sums, in place, no division; mapped,
-    # the columns (num, den) carried from r_b = 1 and from r_b = 0
-    starts = ((1.0, 0.0), (0.0, 1.0)) if mapped else ((bounds[-1][0], 1.0),)
+    # the columns (num, den) carried from a unit step of r_b and from the middle index's r_m
+    middle = bounds[-1][0][..., bounds[-1][0].shape[-1] // 2:][..., :1]
+    starts = ((1.0, 0.0), (middle, 1.0)) if mapped else ((bounds[-1][0], 1.0),)
     columns = [tuple(np.full(shape, x, dtype=np.complex64) for x in c) for c in starts]  # C order (a copy of a
     # broadcast view keeps its strides' order: every later step then runs across memory)
     tmp = np.empty(shape, dtype=np.complex64)
@@ -219,7 +223,7 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths, 
             num += tmp  # r_j = (rb + r e^{2 i beta}) / (1 + rb r e^{2 i beta})
             tmp *= rb
             den += tmp
-        if j in divisions:  # by the last column's denominator (from r_b = 0 where mapped: never 0)
+        if j in divisions:  # by the last column's denominator (a stack's own: mapped, over r_m)
             den = columns[-1][1]
             for x in [x for c in columns for x in c if x is not den] + ([] if tn is None else [tn]):
                 x /= den
@@ -227,8 +231,9 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths, 
     if mapped:  # the stack over each lower index
         (a, c), (b, d) = columns
         r_b, t_b = bounds[-1]
-        den = r_b * c + d
-        r, t = (r_b * a + b) / den, (None if lossless else t_b * tn / den)
+        delta = r_b - middle
+        den = delta * c + d
+        r, t = (delta * a + b) / den, (None if lossless else t_b * tn / den)
     else:
         r, t = columns[0][0], tn
     R = np.clip(_mean(np.abs(r) ** 2, polarised), 0.0, 1.0)
