@@ -201,8 +201,9 @@ def reflect_transmit(n0: float, indices, thicknesses, lower, cos0, wavelengths, 
                                        *(x.shape for x in thick))
     # r = num / den (and t = tn / den): each film's step is products and sums, in place, no division; mapped,
     # the columns (num, den) carried from a unit step of r_b and from the middle index's r_m
-    middle = bounds[-1][0][..., bounds[-1][0].shape[-1] // 2:][..., :1]
-    starts = ((1.0, 0.0), (middle, 1.0)) if mapped else ((bounds[-1][0], 1.0),)
+    r_last = bounds[-1][0]
+    middle = r_last[..., r_last.shape[-1] // 2, None]  # r_m
+    starts = ((1.0, 0.0), (middle, 1.0)) if mapped else ((r_last, 1.0),)
     columns = [tuple(np.full(shape, x, dtype=np.complex64) for x in c) for c in starts]  # C order (a copy of a
     # broadcast view keeps its strides' order: every later step then runs across memory)
     tmp = np.empty(shape, dtype=np.complex64)
