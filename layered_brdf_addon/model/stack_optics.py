@@ -203,7 +203,7 @@ def stack_spectra(stack: FilmStack, n0: float, lower, cos0, scale, wavelengths, 
 SCALE_FREE_SAMPLES = 32  # values of s / lambda a fringe (linear between them: 0.5% of a fringe), and wavelengths
 # as finely in the phase the media's dispersion moves
 LEAST_WAVELENGTH_NODES = 5  # wavelengths a stack whose media disperse is computed at, at least (every 100 nm)
-LOWER_SPREAD_A_NODE = 0.05  # how far the lower medium's n + k moves between two wavelengths computed, at most
+LOWER_SPREAD_A_NODE = 0.1  # how far the lower medium's n + k moves between two wavelengths computed, at most
 CALL_POINTS = 4096  # points whose sums cost what a sum's numpy calls cost (each wavelength computed is a sum)
 
 
